@@ -1,0 +1,114 @@
+// demfem coupling API: what a DEM code offers the FEM client (paper Section 2.4, Fig. 3;
+// DESIGN.md section 2). One object per DEM simulation. Implemented by the built-in DEM, the
+// LIGGGHTS backend, the remote proxy (this API over the ZeroMQ protocol) and analytic test backends.
+//
+// Contract
+// - Units: SI (m, s, N). Arrays are row-major n x 3 (x, y, z of node 0, then node 1, ...).
+// - Frame: node positions and forces are given in the geometry's LOCAL frame (DESIGN.md section 10:
+//   tool x across the width, y along the length with the tip at y = 0, z the travel direction).
+//   The geometry's rigid motion (RigidMotion) maps local to bin coordinates; deformation is what
+//   setNodePositions() adds on top of the undeformed keypoint positions.
+// - Node ids: a geometry's keypoints are unique nodes 0..n-1 in the order of geometries()'s list;
+//   the same ids index triangles, positions and forces. Backends that store per-triangle copies
+//   (LIGGGHTS) merge them.
+// - Force convention: nodeForces() is the force the particles exert ON the geometry's nodes.
+//   A particle-triangle contact force is split to the triangle's three nodes by the barycentric
+//   weights of the contact point (conserves force and moment). With ForceAveraging::IntervalMean
+//   (default) it is the impulse over the last simulate() interval divided by its duration; with
+//   Instantaneous, the value at the last DEM step (the paper's EDEM behaviour).
+// - Pre/post: simulate(d) requires d >= 0 and advances time() by d (up to the DEM step: the backend
+//   runs round(d / dt_DEM) steps and reports the time it reached). simulate(0) is allowed and changes
+//   nothing but lets a client refresh derived data. setNodePositions() takes effect before the next
+//   DEM step, with normals and neighbour data updated and contact history kept.
+// - Errors: every call throws CouplingError (with a code) on bad arguments (unknown geometry, wrong
+//   array size, NaN) or a failed simulation; the object stays usable for shutdown()/checkpoint.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace demfem::adapter {
+
+enum class ErrorCode : std::int32_t {
+  BadRequest = 1,       // malformed message or arguments
+  UnknownGeometry = 2,
+  SizeMismatch = 3,
+  VersionMismatch = 4,
+  SimulationFailed = 5, // blow-up, particle lost, backend error
+  Timeout = 6,          // peer did not answer in time
+  PeerGone = 7,
+  Unsupported = 8,      // the backend does not offer this call (e.g. checkpoint)
+  Internal = 9,
+};
+
+class CouplingError : public std::runtime_error {
+ public:
+  CouplingError(ErrorCode code, const std::string& message)
+      : std::runtime_error(message), code_(code) {}
+  ErrorCode code() const { return code_; }
+
+ private:
+  ErrorCode code_;
+};
+
+enum class ForceMode { IntervalMean, Instantaneous };
+
+struct BackendInfo {
+  std::string backend;        // "builtin", "liggghts", "harmonic", ...
+  std::string version;        // backend's own version string
+  std::int32_t protocol_version = 1;
+  double dem_time_step_s = 0; // the DEM step in use
+};
+
+struct GeometryInfo {
+  std::string name;
+  std::int32_t node_count = 0;
+  std::vector<std::array<std::int32_t, 3>> triangles;  // node ids, outward normal by right-hand rule
+};
+
+// Rigid motion of a geometry in the bin frame: x_bin = origin + R * x_local + velocity * (t - t0).
+// Tools are translated, never rotated, in the paper's studies; rotation is the identity unless set.
+struct RigidMotion {
+  std::array<double, 3> origin_m{0, 0, 0};         // bin position of the local origin at time t0_s
+  std::array<double, 3> velocity_m_s{0, 0, 0};
+  double t0_s = 0;
+};
+
+using NodeArray = std::vector<double>;  // n x 3, row-major
+
+class CouplingApi {
+ public:
+  virtual ~CouplingApi() = default;
+
+  // Identity, version and DEM step. Cheap.
+  virtual BackendInfo info() = 0;
+  // The deformable geometries this simulation offers, with keypoint counts and triangles.
+  virtual std::vector<GeometryInfo> geometries() = 0;
+  // Current simulated time (s).
+  virtual double time() = 0;
+
+  // --- the four calls of the paper (EDEM Coupling Interface equivalents) ---
+  // Current keypoint coordinates in the geometry's local frame (undeformed + deformation).
+  virtual NodeArray nodePositions(const std::string& geometry) = 0;
+  // Force of the particles on each keypoint (N), local frame, per `mode` (see contract above).
+  virtual NodeArray nodeForces(const std::string& geometry, ForceMode mode = ForceMode::IntervalMean) = 0;
+  // Moves the keypoints to `xyz` (local frame, n x 3). Takes effect before the next DEM step.
+  virtual void setNodePositions(const std::string& geometry, const NodeArray& xyz) = 0;
+  // Advances the DEM by `duration_s` (many DEM steps).
+  virtual void simulate(double duration_s) = 0;
+
+  // --- what a real client needs besides ---
+  virtual RigidMotion rigidMotion(const std::string& geometry) = 0;
+  virtual void setRigidMotion(const std::string& geometry, const RigidMotion& motion) = 0;
+  // Writes everything needed to resume bit-identically; restore() reads it back.
+  virtual void checkpoint(const std::filesystem::path& file) = 0;
+  virtual void restore(const std::filesystem::path& file) = 0;
+  // Releases resources; further calls throw. Idempotent.
+  virtual void shutdown() = 0;
+};
+
+}  // namespace demfem::adapter

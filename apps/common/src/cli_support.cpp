@@ -1,0 +1,60 @@
+#include "demfem/cli/cli_support.hpp"
+
+#include "demfem/study/study.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+namespace demfem::cli {
+
+int runApp(CLI::App& app, int argc, char** argv) {
+  const std::string prog = app.get_name();
+  try {
+    app.parse(argc, argv);
+    return kOk;
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? kOk : kBadInput;
+  } catch (const study::StudyError& e) {
+    std::cerr << e.what() << '\n';
+    return kBadInput;
+  } catch (const InputError& e) {
+    std::cerr << prog << ": " << e.what() << '\n';
+    return kBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << prog << ": error: " << e.what() << '\n';
+    return kFailure;
+  }
+}
+
+std::string& addJsonOption(CLI::App& cmd) {
+  auto target = std::make_shared<std::string>();
+  // CLI11 binds by reference; keep the string alive as long as the App by storing it in a static
+  // registry owned by this translation unit.
+  static std::vector<std::shared_ptr<std::string>> keep;
+  keep.push_back(target);
+  cmd.add_option("--json", *target,
+                 "Also write the reported numbers as JSON to FILE ('-' = standard output); "
+                 "units are in the key names");
+  return *target;
+}
+
+void writeJson(const std::string& target, const nlohmann::json& doc) {
+  if (target.empty()) return;
+  if (target == "-") {
+    std::cout << doc.dump(2) << '\n';
+    return;
+  }
+  const std::filesystem::path path(target);
+  const std::filesystem::path tmp = path.string() + ".partial";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error("cannot write JSON to " + target);
+    out << doc.dump(2) << '\n';
+    if (!out) throw std::runtime_error("writing JSON to " + target + " failed");
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace demfem::cli

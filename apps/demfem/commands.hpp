@@ -1,0 +1,12 @@
+// Subcommands of the `demfem` front end, one file each.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace demfem::cli {
+void addValidateCommand(CLI::App& app);  // validate.cpp
+void addRunCommand(CLI::App& app);       // run.cpp
+void addDepositCommand(CLI::App& app);   // deposit.cpp
+void addEvaluateCommand(CLI::App& app);  // evaluate.cpp
+void addCompareCommand(CLI::App& app);   // compare.cpp
+}  // namespace demfem::cli

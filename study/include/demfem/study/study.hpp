@@ -1,0 +1,227 @@
+// demfem study: the in-memory form of one study file (studies/*.json), DESIGN.md section 7.
+//
+// Contract
+// - Every quantity is SI inside (m, s, kg, N, Pa, rad). The JSON file carries the unit in the key
+//   name (`depth_mm`, `E_Pa`, `alpha_s`); the loader converts once, here nothing is in mm.
+// - A Study returned by loadStudy() has passed validation: every field has the documented type,
+//   unit and range, cross-field rules hold (layers tile the bin depth, the interaction table covers
+//   every material pair, constraints lie on the tool). Code using a Study may rely on that.
+// - Frames (DESIGN.md section 10): bin frame x across, y up (y = 0 bin floor), z along the bin; tool
+//   local frame x across the width, y along the length (tip y = 0, top y = L), z the travel direction
+//   (through the thickness). The tool moves in +z of the bin frame.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace demfem::study {
+
+// One validation problem: where (JSON pointer, e.g. "/tools/0/fem/E_Pa") and what.
+struct Issue {
+  std::string path;
+  std::string message;
+};
+
+// Thrown by loadStudy() with every problem found, not just the first. what() lists them as
+// "FILE: PATH: MESSAGE" lines.
+class StudyError : public std::runtime_error {
+ public:
+  StudyError(std::string file, std::vector<Issue> issues);
+  const std::string& file() const { return file_; }
+  const std::vector<Issue>& issues() const { return issues_; }
+
+ private:
+  std::string file_;
+  std::vector<Issue> issues_;
+};
+
+// Elastic and contact properties of a DEM material (particles of a layer, bin walls, a tool).
+struct DemMaterial {
+  std::string name;
+  double density_kg_m3 = 0;
+  double youngs_Pa = 0;
+  double poisson = 0;
+  double yield_Pa = 0;  // EDEM hysteretic spring: K1 = 5 R* min(Y_i, Y_j); 0 = not used
+};
+
+// Contact law selection (DESIGN.md section 11). EDEM-style and LIGGGHTS-compatible variants.
+enum class NormalModel { EdemHysteretic, Hooke, HookeHysteresis };
+enum class CohesionModel { None, EdemLinear, Sjkr, Sjkr2 };
+enum class RollingModel { None, EdemStandard, Cdt, Epsd };
+
+struct ContactModel {
+  NormalModel normal = NormalModel::EdemHysteretic;
+  CohesionModel cohesion = CohesionModel::EdemLinear;
+  RollingModel rolling = RollingModel::EdemStandard;
+  bool tangential_history = true;
+  // EDEM "stiffness factor" (Table 2 gamma_t): kt0 = stiffness_factor * K1 (documented assumption).
+  double stiffness_factor = 0.85;
+  // EDEM "damping factor" (Table 2 D_n): viscous c = 2 D_n sqrt(m* k) (documented assumption).
+  double damping_factor = 0.5;
+  // LIGGGHTS hooke / hooke/hysteresis parameters (LIGGGHTS 3.8 names).
+  double characteristic_velocity_m_s = 0.1;
+  double coefficient_max_elastic_stiffness = 2.0;
+  double coefficient_plasticity_depth = 0.1;
+  double coefficient_adhesion_stiffness = 0.0;
+};
+
+// Interaction between two materials (symmetric): Table 2 restitution/cohesion, Table 4 friction.
+struct Interaction {
+  std::string a, b;  // material names
+  double restitution = 0.5;
+  double static_friction = 0.5;
+  double rolling_friction = 0.0;
+  double cohesion_J_m3 = 0.0;
+};
+
+// A horizontal soil layer, depth measured down from the settled soil surface (Section 2.9, Fig. 4a).
+struct Layer {
+  std::string material;  // DemMaterial name of the particles in this layer
+  double top_depth_m = 0;
+  double bottom_depth_m = 0;
+};
+
+struct Soil {
+  double bin_length_m = 0.650;  // along z
+  double bin_width_m = 0.250;   // along x
+  double fill_height_m = 0.085; // settled assembly height, y
+  double diameter_min_m = 0.0095;
+  double diameter_max_m = 0.0105;
+  std::vector<DemMaterial> materials;      // particle materials and wall materials
+  std::string bin_material;                // DemMaterial name of the bin walls
+  std::vector<Layer> layers;               // top to bottom, tiling 0..fill_height
+  std::vector<Interaction> interactions;   // every pair of used materials, incl. walls and tools
+  ContactModel contact;
+  std::uint64_t deposition_seed = 1;
+  double settle_kinetic_energy_J = 1e-6;   // deposition ends below this total kinetic energy
+};
+
+// Tool geometry: a plate meshed by demfem, a Gmsh mesh, or externally assembled M and K.
+enum class GeometryKind { Plate, Gmsh, MatrixMarket, Cone };
+
+struct ToolGeometry {
+  GeometryKind kind = GeometryKind::Plate;
+  double length_m = 0.200;    // plate: along tool y
+  double width_m = 0.040;     // plate: along tool x
+  double thickness_m = 0.003; // plate: along tool z
+  double keypoint_spacing_m = 0.005;   // DEM grid: surface nodes on this grid are the keypoints
+  std::filesystem::path mesh_file;     // Gmsh: msh 4 ASCII
+  std::filesystem::path mass_file;     // MatrixMarket: M
+  std::filesystem::path stiffness_file;// MatrixMarket: K
+  std::filesystem::path keypoint_file; // MatrixMarket: keypoint list (node ids and coordinates)
+  // Cone penetrometer (Fig. 6c): projected area and full apex angle.
+  double cone_area_m2 = 5e-4;
+  double cone_angle_rad = 1.0471975511965976;
+};
+
+enum class ElementOrder { Linear, Quadratic };
+
+struct ToolFem {
+  bool deformable = true;        // false: rigid tool, DEM only (the paper's S235 "DEM simulation")
+  double youngs_Pa = 0;
+  double poisson = 0;
+  double density_kg_m3 = 0;
+  // Rayleigh damping C = alpha K + beta M (Eq 4). alpha in seconds: Table 3's 0.55 read as 0.55 ms.
+  double alpha_s = 0;
+  double beta_per_s = 0;
+  ElementOrder element_order = ElementOrder::Quadratic;
+};
+
+// Section 2.9 constraints, measured from the top of the tool (y = L) downwards.
+struct ToolConstraints {
+  double clamp_length_m = 0.040;       // all DOF fixed for y >= L - clamp_length
+  double load_cell_from_top_m = 0.065; // z fixed on this line
+  double sensor_from_top_m = 0.093;    // deformation sensor point
+};
+
+// Rigid motion in the bin frame: inserted vertically to `depth`, then dragged in +z.
+struct ToolMotion {
+  double depth_m = 0.018;
+  double velocity_m_s = 0.03119;
+  double stroke_m = 0.600;
+  double start_z_m = 0.0;          // tool face position along the bin at the start of the stroke
+  double insertion_velocity_m_s = 0.05; // vertical insertion before the stroke
+};
+
+struct Tool {
+  std::string name = "tool";       // geometry name on the coupling API
+  std::string dem_material;        // DemMaterial name used for particle-tool contacts
+  ToolGeometry geometry;
+  ToolFem fem;
+  ToolConstraints constraints;
+  ToolMotion motion;
+};
+
+// Calibration-weight test (Section 2.10.1, Fig. 5): tool clamped horizontally, weight hung suddenly.
+struct WeightDrop {
+  double mass_kg = 1.0;
+  double pan_rows_from_tip_m = 0.010;  // keypoint rows within this distance of the tip carry the pan
+  double duration_s = 3.0;
+};
+
+struct FemSettings {
+  double dt_s = 0.001;            // Table 3 dt_FEM
+};
+
+enum class TimeStepCriterion { Rayleigh, StiffestSpring };
+
+struct DemSettings {
+  std::string backend = "builtin";   // builtin | liggghts | a test backend name
+  TimeStepCriterion criterion = TimeStepCriterion::Rayleigh;
+  double dt_fraction = 0.2;          // of the chosen criterion's critical step
+  std::optional<double> dt_s;        // explicit step, overrides the criterion
+  int threads = 1;
+  std::uint64_t seed = 1;
+};
+
+enum class ForceAveraging { IntervalMean, Instantaneous };
+
+struct CouplingSettings {
+  std::string endpoint;              // empty: chosen by `demfem run` (ipc://)
+  ForceAveraging force_averaging = ForceAveraging::IntervalMean;
+  double timeout_s = 30.0;
+};
+
+struct OutputSettings {
+  std::filesystem::path directory = "out";
+  int vtk_every = 0;                 // FEM steps between VTK files; 0 = none
+  int csv_every = 1;
+};
+
+enum class StudyKind { Coupled, DemOnly, WeightDrop, ConePenetration, FemOnly };
+
+struct Study {
+  std::filesystem::path source;      // file it was loaded from (empty if built in code)
+  std::string name;
+  StudyKind kind = StudyKind::Coupled;
+  std::string notes;
+  Soil soil;
+  std::vector<Tool> tools;
+  std::optional<WeightDrop> weight_drop;
+  FemSettings fem;
+  DemSettings dem;
+  CouplingSettings coupling;
+  OutputSettings output;
+
+  const DemMaterial& material(const std::string& name) const;  // throws std::out_of_range
+  const Interaction& interaction(const std::string& a, const std::string& b) const;
+};
+
+// Loads and validates a study file. Throws StudyError listing every problem (with JSON paths),
+// or std::runtime_error if the file cannot be read or is not JSON (with line/column).
+Study loadStudy(const std::filesystem::path& file);
+
+// Same, from JSON text; `origin` names the source in messages.
+Study parseStudy(const std::string& json_text, const std::string& origin);
+
+// The effective values with units, one "path = value unit" line each (for `demfem validate`).
+std::string describe(const Study& study);
+
+// Stable content hash of everything that determines the settled soil (for deposit reuse).
+std::string soilHash(const Study& study);
+
+}  // namespace demfem::study

@@ -1,0 +1,1 @@
+#include "demfem/fem/tool_model.hpp"
