@@ -8,4 +8,11 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study&) {
                                "the liggghts DEM backend is not built yet (liggghts backend issue)");
 }
 
+bool isLeaderRank() { return true; }
+
+void followLeader(const study::Study&) {
+  throw adapter::CouplingError(adapter::ErrorCode::Unsupported,
+                               "the liggghts DEM backend is not built yet (liggghts backend issue)");
+}
+
 }  // namespace demfem::liggghts
