@@ -1,12 +1,127 @@
-// demfem-dem: serves a DEM backend over the demfem protocol. Placeholder until the coupling issue lands.
+// demfem-dem: the DEM adapter server. Builds a DEM backend (built-in, LIGGGHTS or an analytic test
+// backend) and serves it over the demfem protocol until the FEM client shuts it down.
+#include "demfem/adapter/server.hpp"
+#include "demfem/adapter/test_backends.hpp"
+#include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/protocol/transport.hpp"
+#include "demfem/study/study.hpp"
+#if DEMFEM_WITH_LIGGGHTS
+#include "demfem/backends/liggghts/backend.hpp"
+#endif
 
-#include <stdexcept>
+#include <algorithm>
+#include <fstream>
+#include <iostream>
+
+namespace {
+
+using namespace demfem;
+
+struct Options {
+  std::string backend;
+  std::string study_file;
+  std::string bind;
+  std::string curve_keys;
+  std::string make_curve_keys;
+  std::string endpoint_file;
+  double connect_timeout_s = 600;
+  double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
+  adapter::TestLoad load;
+};
+
+std::chrono::milliseconds millis(double seconds) {
+  return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
+}
+
+std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::string& backend,
+                                                   const std::optional<study::Study>& study) {
+  const auto& tests = adapter::testBackendNames();
+  if (std::find(tests.begin(), tests.end(), backend) != tests.end())
+    return adapter::makeTestBackend(backend, study ? study->tools : std::vector<study::Tool>{study::Tool{}}, o.load);
+  if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
+  if (backend == "builtin") return builtin::makeBackend(*study);
+#if DEMFEM_WITH_LIGGGHTS
+  if (backend == "liggghts") return liggghts::makeBackend(*study);
+#else
+  if (backend == "liggghts")
+    throw cli::InputError("this demfem-dem was built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF)");
+#endif
+  throw cli::InputError("unknown backend '" + backend + "' (builtin, liggghts, constant, harmonic, spring)");
+}
+
+void run(const Options& o) {
+  if (!o.make_curve_keys.empty()) {
+    protocol::writeCurveKeyDirectory(o.make_curve_keys);
+    std::cout << "demfem-dem: wrote CurveZMQ keys to " << o.make_curve_keys
+              << " (server.pub/.secret stay with the DEM server, client.pub/.secret go to the FEM client; "
+                 "both need server.pub and client.pub)\n";
+    return;
+  }
+  std::optional<study::Study> study;
+  if (!o.study_file.empty()) study = study::loadStudy(o.study_file);
+  const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : "builtin";
+#if DEMFEM_WITH_LIGGGHTS
+  if (backend == "liggghts" && !liggghts::isLeaderRank()) {
+    if (!study) throw cli::InputError("--study is required for the 'liggghts' backend");
+    liggghts::followLeader(*study);  // non-leader MPI rank: no socket
+    return;
+  }
+#endif
+  std::string endpoint = o.bind;
+  if (endpoint.empty()) endpoint = study && !study->coupling.endpoint.empty() ? study->coupling.endpoint : "tcp://127.0.0.1:5555";
+  const double idle_s = o.idle_timeout_s > 0 ? o.idle_timeout_s : 2.0 * (study ? study->coupling.timeout_s : 30.0);
+
+  std::optional<protocol::ServerSecurity> security;
+  if (!o.curve_keys.empty()) security = protocol::loadServerSecurity(o.curve_keys);
+  try {
+    protocol::checkBindEndpoint(endpoint, security.has_value());
+  } catch (const std::invalid_argument& e) {
+    throw cli::InputError(std::string("--bind: ") + e.what());
+  }
+  auto api = makeBackend(o, backend, study);
+  zmq::context_t context(1);
+  protocol::ServerSocket socket(context, endpoint, security);
+  if (!o.endpoint_file.empty()) {
+    const std::string tmp = o.endpoint_file + ".partial";
+    { std::ofstream(tmp) << socket.endpoint() << '\n'; }
+    std::filesystem::rename(tmp, o.endpoint_file);
+  }
+  std::cout << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
+            << (security ? " (CurveZMQ)" : "") << std::endl;
+  adapter::Server server(*api);
+  server.serve(socket, {millis(o.connect_timeout_s), millis(idle_s)});
+  std::cout << "demfem-dem: shut down by the client" << std::endl;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"demfem-dem: DEM adapter server of demfem [not built yet: coupling issue]"};
+  CLI::App app{"demfem-dem: DEM adapter server of demfem. Serves a DEM backend over the demfem protocol "
+               "(docs/protocol.md) to one FEM client until it shuts the backend down."};
   app.name("demfem-dem");
-  app.allow_extras();
-  app.callback([] { throw std::runtime_error("demfem-dem is not built yet (coupling issue)"); });
+  Options o;
+  app.add_option("--backend", o.backend,
+                 "builtin | liggghts | constant | harmonic | spring (analytic test backends); default: the study's "
+                 "dem.backend, else builtin");
+  app.add_option("--study", o.study_file, "Study file (JSON); optional for test backends (default plate tool)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--bind", o.bind,
+                 "Endpoint to serve: tcp://127.0.0.1:PORT (PORT * = any free port), ipc://PATH; default: the study's "
+                 "coupling.endpoint, else tcp://127.0.0.1:5555. Non-loopback tcp needs --curve-keys");
+  app.add_option("--curve-keys", o.curve_keys, "CurveZMQ key directory (server.pub, server.secret, client.pub)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--make-curve-keys", o.make_curve_keys, "Write a fresh server and client key pair to DIR and exit");
+  app.add_option("--endpoint-file", o.endpoint_file, "Write the bound endpoint (with the chosen port) to FILE");
+  app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--idle-timeout-s", o.idle_timeout_s,
+                 "Give up if the client sends nothing for this long (s); default: twice the study's coupling timeout")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--test-force-N", o.load.force_N, "Test backends: total tip-row force F along local z (N)");
+  app.add_option("--test-frequency-Hz", o.load.frequency_Hz, "Harmonic test backend: frequency f (Hz)");
+  app.add_option("--test-stiffness-N-m", o.load.stiffness_N_m, "Spring test backend: total tip-row stiffness k (N/m)");
+  app.add_option("--test-dt-s", o.load.dem_time_step_s, "Test backends: DEM time step (s)")->check(CLI::PositiveNumber);
+  app.callback([&] { run(o); });
   return demfem::cli::runApp(app, argc, argv);
 }

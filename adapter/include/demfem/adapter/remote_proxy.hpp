@@ -1,0 +1,63 @@
+// The remote proxy: the coupling API (coupling_api.hpp) over the demfem protocol, so that client
+// code cannot tell a DEM backend in another process (or host) from a local one.
+//
+// Contract
+// - The constructor connects and performs the "hello" handshake: it throws CouplingError
+//   (VersionMismatch) if the server speaks another protocol version, (Timeout/PeerGone) if the
+//   server does not answer within `timeout` or refuses the CurveZMQ key.
+// - Every call is one request/reply; errors of the server come back as CouplingError with the
+//   server's code and message (prefixed with the endpoint). Timeouts throw CouplingError(Timeout)
+//   with a message saying the DEM server is gone; the proxy is then unusable except shutdown().
+// - info() is the handshake's answer (cached). shutdown() asks the server to shut its backend down;
+//   it is idempotent and does not throw after a transport failure (the peer is gone anyway).
+// - Checkpoint/restore paths are files on the SERVER's host.
+#pragma once
+
+#include "demfem/adapter/coupling_api.hpp"
+#include "demfem/protocol/transport.hpp"
+
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace demfem::adapter {
+
+struct RemoteOptions {
+  std::string endpoint;                                // tcp://HOST:PORT, ipc://PATH, inproc://NAME
+  std::chrono::milliseconds timeout{std::chrono::seconds(30)};
+  std::optional<protocol::ClientSecurity> security;    // CurveZMQ keys
+  std::string client_name = "demfem";
+};
+
+class RemoteProxy final : public CouplingApi {
+ public:
+  // `context`: a ZeroMQ context to share (needed for inproc://); nullptr = own context.
+  explicit RemoteProxy(const RemoteOptions& options, zmq::context_t* context = nullptr);
+  ~RemoteProxy() override;
+
+  BackendInfo info() override { return info_; }
+  std::vector<GeometryInfo> geometries() override;
+  double time() override;
+  NodeArray nodePositions(const std::string& geometry) override;
+  NodeArray nodeForces(const std::string& geometry, ForceMode mode = ForceMode::IntervalMean) override;
+  void setNodePositions(const std::string& geometry, const NodeArray& xyz) override;
+  void simulate(double duration_s) override;
+  RigidMotion rigidMotion(const std::string& geometry) override;
+  void setRigidMotion(const std::string& geometry, const RigidMotion& motion) override;
+  void checkpoint(const std::filesystem::path& file) override;
+  void restore(const std::filesystem::path& file) override;
+  void shutdown() override;
+
+ private:
+  protocol::ReplyBody call(protocol::RequestBody body);
+
+  std::unique_ptr<zmq::context_t> own_context_;
+  std::unique_ptr<protocol::ClientSocket> socket_;
+  std::string endpoint_;
+  std::uint64_t seq_ = 0;
+  BackendInfo info_;
+  bool shut_down_ = false;
+};
+
+}  // namespace demfem::adapter

@@ -1,1 +1,0 @@
-// Placeholder so the target exists before its issue lands; delete when the first real source is added.

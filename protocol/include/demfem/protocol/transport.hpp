@@ -1,0 +1,102 @@
+// ZeroMQ transport of the demfem protocol: a REP server socket and a REQ client socket carrying the
+// multipart messages of codec.hpp, over inproc://, ipc:// or tcp://.
+//
+// Contract
+// - Timeouts everywhere: ClientSocket::request() throws ProtocolError(Timeout) when no reply arrives
+//   within the timeout (the message says the peer is gone or refused the client); the socket is then
+//   unusable (REQ state) and every later request throws PeerGone. ServerSocket::receive() returns
+//   nothing after its timeout, so a server can notice a vanished client.
+// - Loopback by default: a server refuses to bind tcp:// to a non-loopback address unless CurveZMQ
+//   keys are given (then clients must authenticate).
+// - CurveZMQ key directory (made by writeCurveKeyDirectory(), keys from zmq_curve_keypair, Z85 text
+//   one key per file): server.pub, server.secret, client.pub, client.secret. The server needs
+//   server.secret and client.pub (the only client key it accepts, checked by a ZAP handler); the
+//   client needs server.pub, client.pub and client.secret. A client with another key is refused:
+//   its request() throws ProtocolError(PeerGone) naming the refusal.
+// - Frames above kMaxFrameBytes are dropped by ZeroMQ (ZMQ_MAXMSGSIZE) before they reach the codec.
+#pragma once
+
+#include "demfem/protocol/codec.hpp"
+
+#include <zmq.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace demfem::protocol {
+
+struct CurveKeyPair {
+  std::string public_key;  // Z85, 40 characters
+  std::string secret_key;
+};
+
+struct ServerSecurity {
+  CurveKeyPair server;
+  std::string authorized_client_key;  // Z85 public key of the one client allowed in
+};
+
+struct ClientSecurity {
+  std::string server_public_key;
+  CurveKeyPair client;
+};
+
+// Creates `dir` (if needed) with fresh server and client key pairs; secret files get mode 0600.
+void writeCurveKeyDirectory(const std::filesystem::path& dir);
+// Read the files a server / a client needs from `dir`; throw std::runtime_error naming a missing or
+// malformed file.
+ServerSecurity loadServerSecurity(const std::filesystem::path& dir);
+ClientSecurity loadClientSecurity(const std::filesystem::path& dir);
+
+// Throws std::invalid_argument if `endpoint` is not inproc://, ipc:// or tcp://HOST:PORT, or if it is
+// tcp:// on a non-loopback host while `with_curve` is false.
+void checkBindEndpoint(const std::string& endpoint, bool with_curve);
+
+class ServerSocket {
+ public:
+  // Binds `endpoint` (tcp port "*" picks a free port; see endpoint()).
+  ServerSocket(zmq::context_t& context, const std::string& endpoint,
+               const std::optional<ServerSecurity>& security = std::nullopt);
+  ~ServerSocket();
+  ServerSocket(const ServerSocket&) = delete;
+  ServerSocket& operator=(const ServerSocket&) = delete;
+
+  // The endpoint actually bound (with the chosen port).
+  const std::string& endpoint() const { return endpoint_; }
+  // Next request, or nothing after `timeout`.
+  std::optional<Multipart> receive(std::chrono::milliseconds timeout);
+  // Reply to the request last received.
+  void send(const Multipart& reply);
+
+ private:
+  class ZapHandler;
+  std::unique_ptr<ZapHandler> zap_;
+  zmq::socket_t socket_;
+  std::string endpoint_;
+};
+
+class ClientSocket {
+ public:
+  ClientSocket(zmq::context_t& context, const std::string& endpoint, std::chrono::milliseconds timeout,
+               const std::optional<ClientSecurity>& security = std::nullopt);
+  ~ClientSocket();
+  ClientSocket(const ClientSocket&) = delete;
+  ClientSocket& operator=(const ClientSocket&) = delete;
+
+  // Sends `request` and waits for the reply (see the timeout contract above).
+  Multipart request(const Multipart& request);
+  const std::string& endpoint() const { return endpoint_; }
+
+ private:
+  zmq::socket_t socket_;
+  zmq::socket_t monitor_;  // handshake events: tells a refused key from a silent peer
+  std::string endpoint_;
+  std::chrono::milliseconds timeout_;
+  bool broken_ = false;
+};
+
+}  // namespace demfem::protocol

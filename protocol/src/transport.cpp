@@ -1,0 +1,240 @@
+#include "demfem/protocol/transport.hpp"
+
+#include <zmq_addon.hpp>
+
+#include <fstream>
+#include <regex>
+#include <stdexcept>
+
+namespace demfem::protocol {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kZapEndpoint = "inproc://zeromq.zap.01";  // fixed by the ZAP RFC 27
+constexpr auto kZapPoll = std::chrono::milliseconds(100);
+
+std::string readKeyFile(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("CurveZMQ key file " + file.string() + " cannot be read");
+  std::string key;
+  std::getline(in, key);
+  while (!key.empty() && (key.back() == '\r' || key.back() == ' ')) key.pop_back();
+  if (key.size() != 40)
+    throw std::runtime_error("CurveZMQ key file " + file.string() + ": expected one 40-character Z85 key, got " +
+                             std::to_string(key.size()) + " characters");
+  return key;
+}
+
+void writeKeyFile(const fs::path& file, const std::string& key, bool secret) {
+  {
+    std::ofstream out(file, std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write CurveZMQ key file " + file.string());
+    out << key << '\n';
+  }
+  fs::permissions(file, secret ? fs::perms::owner_read | fs::perms::owner_write
+                               : fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                                     fs::perms::others_read);
+}
+
+CurveKeyPair newKeyPair() {
+  char pub[41] = {}, sec[41] = {};
+  if (zmq_curve_keypair(pub, sec) != 0)
+    throw std::runtime_error(std::string("zmq_curve_keypair failed: ") + zmq_strerror(zmq_errno()));
+  return {pub, sec};
+}
+
+std::string z85Of(const zmq::message_t& binary_key) {
+  if (binary_key.size() != 32) return {};
+  char text[41] = {};
+  zmq_z85_encode(text, static_cast<const std::uint8_t*>(binary_key.data()), 32);
+  return text;
+}
+
+}  // namespace
+
+void writeCurveKeyDirectory(const fs::path& dir) {
+  fs::create_directories(dir);
+  const CurveKeyPair server = newKeyPair(), client = newKeyPair();
+  writeKeyFile(dir / "server.pub", server.public_key, false);
+  writeKeyFile(dir / "server.secret", server.secret_key, true);
+  writeKeyFile(dir / "client.pub", client.public_key, false);
+  writeKeyFile(dir / "client.secret", client.secret_key, true);
+}
+
+ServerSecurity loadServerSecurity(const fs::path& dir) {
+  return {{readKeyFile(dir / "server.pub"), readKeyFile(dir / "server.secret")}, readKeyFile(dir / "client.pub")};
+}
+
+ClientSecurity loadClientSecurity(const fs::path& dir) {
+  return {readKeyFile(dir / "server.pub"), {readKeyFile(dir / "client.pub"), readKeyFile(dir / "client.secret")}};
+}
+
+void checkBindEndpoint(const std::string& endpoint, bool with_curve) {
+  if (endpoint.rfind("inproc://", 0) == 0 || endpoint.rfind("ipc://", 0) == 0) return;
+  static const std::regex tcp(R"(tcp://(\[[^\]]+\]|[^:\[\]]+):(\d+|\*))");
+  std::smatch m;
+  if (!std::regex_match(endpoint, m, tcp))
+    throw std::invalid_argument("endpoint '" + endpoint +
+                                "' is not inproc://NAME, ipc://PATH or tcp://HOST:PORT (PORT may be *)");
+  const std::string host = m[1];
+  const bool loopback = host == "localhost" || host == "[::1]" || host.rfind("127.", 0) == 0;
+  if (!loopback && !with_curve)
+    throw std::invalid_argument("refusing to serve on non-loopback address '" + host +
+                                "' without authentication: pass --curve-keys DIR (CurveZMQ) or bind 127.0.0.1");
+}
+
+// ZAP handler (RFC 27): accepts a CURVE client only if its public key is the authorized one.
+class ServerSocket::ZapHandler {
+ public:
+  ZapHandler(zmq::context_t& context, std::string authorized_key)
+      : socket_(context, zmq::socket_type::rep), authorized_(std::move(authorized_key)) {
+    socket_.set(zmq::sockopt::linger, 0);
+    socket_.bind(kZapEndpoint);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~ZapHandler() {
+    stop_ = true;
+    thread_.join();
+  }
+
+ private:
+  void run() {
+    while (!stop_) {
+      zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+      if (zmq::poll(&item, 1, kZapPoll) == 0) continue;
+      std::vector<zmq::message_t> frames;
+      if (!zmq::recv_multipart(socket_, std::back_inserter(frames), zmq::recv_flags::dontwait)) continue;
+      // version, request id, domain, address, identity, mechanism, credentials...
+      const bool ok = frames.size() >= 7 && frames[5].to_string() == "CURVE" && z85Of(frames[6]) == authorized_;
+      std::vector<zmq::message_t> reply;
+      reply.emplace_back(std::string("1.0"));
+      reply.emplace_back(frames.size() > 1 ? frames[1].to_string() : std::string());
+      reply.emplace_back(std::string(ok ? "200" : "400"));
+      reply.emplace_back(std::string(ok ? "OK" : "client key not authorized"));
+      reply.emplace_back(std::string());
+      reply.emplace_back(std::string());
+      zmq::send_multipart(socket_, reply);
+    }
+  }
+
+  zmq::socket_t socket_;
+  std::string authorized_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+ServerSocket::ServerSocket(zmq::context_t& context, const std::string& endpoint,
+                           const std::optional<ServerSecurity>& security) {
+  checkBindEndpoint(endpoint, security.has_value());
+  if (security) zap_ = std::make_unique<ZapHandler>(context, security->authorized_client_key);
+  socket_ = zmq::socket_t(context, zmq::socket_type::rep);
+  socket_.set(zmq::sockopt::linger, 0);
+  socket_.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
+  if (security) {
+    socket_.set(zmq::sockopt::curve_server, 1);
+    socket_.set(zmq::sockopt::curve_secretkey, security->server.secret_key);
+    socket_.set(zmq::sockopt::zap_domain, "demfem");
+  }
+  try {
+    socket_.bind(endpoint);
+  } catch (const zmq::error_t& e) {
+    throw std::runtime_error("cannot bind " + endpoint + ": " + e.what());
+  }
+  endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
+}
+
+ServerSocket::~ServerSocket() {
+  socket_.close();  // before the ZAP handler goes
+}
+
+std::optional<Multipart> ServerSocket::receive(std::chrono::milliseconds timeout) {
+  zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+  if (zmq::poll(&item, 1, timeout) == 0) return std::nullopt;
+  std::vector<zmq::message_t> frames;
+  if (!zmq::recv_multipart(socket_, std::back_inserter(frames))) return std::nullopt;
+  Multipart message;
+  message.reserve(frames.size());
+  for (auto& f : frames) message.emplace_back(static_cast<const char*>(f.data()), f.size());
+  return message;
+}
+
+void ServerSocket::send(const Multipart& reply) {
+  std::vector<zmq::const_buffer> buffers;
+  buffers.reserve(reply.size());
+  for (const auto& f : reply) buffers.emplace_back(f.data(), f.size());
+  zmq::send_multipart(socket_, buffers);
+}
+
+ClientSocket::ClientSocket(zmq::context_t& context, const std::string& endpoint, std::chrono::milliseconds timeout,
+                           const std::optional<ClientSecurity>& security)
+    : socket_(context, zmq::socket_type::req), endpoint_(endpoint), timeout_(timeout) {
+  socket_.set(zmq::sockopt::linger, 0);
+  socket_.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
+  socket_.set(zmq::sockopt::sndtimeo, static_cast<int>(timeout.count()));
+  if (security) {
+    socket_.set(zmq::sockopt::curve_serverkey, security->server_public_key);
+    socket_.set(zmq::sockopt::curve_publickey, security->client.public_key);
+    socket_.set(zmq::sockopt::curve_secretkey, security->client.secret_key);
+  }
+  const std::string monitor_endpoint = "inproc://demfem-client-monitor-" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
+  if (zmq_socket_monitor(socket_.handle(), monitor_endpoint.c_str(),
+                         ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                             ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL) != 0)
+    throw std::runtime_error(std::string("zmq_socket_monitor failed: ") + zmq_strerror(zmq_errno()));
+  monitor_ = zmq::socket_t(context, zmq::socket_type::pair);
+  monitor_.set(zmq::sockopt::linger, 0);
+  monitor_.connect(monitor_endpoint);
+  try {
+    socket_.connect(endpoint);
+  } catch (const zmq::error_t& e) {
+    throw std::invalid_argument("cannot connect to '" + endpoint + "': " + e.what());
+  }
+}
+
+ClientSocket::~ClientSocket() {
+  zmq_socket_monitor(socket_.handle(), nullptr, 0);
+  monitor_.close();
+  socket_.close();
+}
+
+Multipart ClientSocket::request(const Multipart& request) {
+  if (broken_)
+    throw ProtocolError(WireError::PeerGone, "connection to " + endpoint_ + " is unusable after an earlier failure");
+  std::vector<zmq::const_buffer> buffers;
+  for (const auto& f : request) buffers.emplace_back(f.data(), f.size());
+  const std::string seconds = std::to_string(static_cast<double>(timeout_.count()) / 1000.0);
+  if (!zmq::send_multipart(socket_, buffers)) {
+    broken_ = true;
+    throw ProtocolError(WireError::Timeout, "could not send to " + endpoint_ + " within " + seconds + " s");
+  }
+  const auto deadline = std::chrono::steady_clock::now() + timeout_;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) break;
+    zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::poll(items, 2, left);
+    if (items[1].revents & ZMQ_POLLIN) {
+      std::vector<zmq::message_t> event;
+      (void)zmq::recv_multipart(monitor_, std::back_inserter(event));
+      broken_ = true;
+      throw ProtocolError(WireError::PeerGone,
+                          "the server at " + endpoint_ +
+                              " refused the connection during the security handshake (wrong or missing "
+                              "CurveZMQ key? check --curve-keys)");
+    }
+    if (items[0].revents & ZMQ_POLLIN) {
+      std::vector<zmq::message_t> frames;
+      (void)zmq::recv_multipart(socket_, std::back_inserter(frames));
+      Multipart reply;
+      for (auto& f : frames) reply.emplace_back(static_cast<const char*>(f.data()), f.size());
+      return reply;
+    }
+  }
+  broken_ = true;
+  throw ProtocolError(WireError::Timeout, "no reply from the DEM server at " + endpoint_ + " within " + seconds +
+                                              " s: the peer is gone, hung, or refused this client");
+}
+
+}  // namespace demfem::protocol
