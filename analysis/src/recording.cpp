@@ -1,0 +1,344 @@
+#include "demfem/analysis/recording.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+namespace demfem::analysis {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+std::string formatNumber(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+std::string trim(std::string_view text) {
+  const auto first = text.find_first_not_of(" \t\r");
+  if (first == std::string_view::npos) return {};
+  const auto last = text.find_last_not_of(" \t\r");
+  return std::string(text.substr(first, last - first + 1));
+}
+
+std::vector<std::string> splitCells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::size_t begin = 0;
+  while (true) {
+    const auto comma = line.find(',', begin);
+    cells.push_back(trim(std::string_view(line).substr(begin, comma == std::string::npos ? std::string::npos : comma - begin)));
+    if (comma == std::string::npos) break;
+    begin = comma + 1;
+  }
+  return cells;
+}
+
+// --- sidecar --------------------------------------------------------------------------------
+
+class Sidecar {
+ public:
+  Sidecar(fs::path path) : path_(std::move(path)) {
+    std::ifstream in(path_);
+    if (!in) throw InputError(path_.string() + ": cannot open the sidecar (every recording needs a JSON file of the same stem)");
+    try {
+      doc_ = json::parse(in);
+    } catch (const json::parse_error& e) {
+      throw InputError(path_.string() + ": byte " + std::to_string(e.byte) + ": not valid JSON (" + e.what() + ")");
+    }
+    if (!doc_.is_object()) throw InputError(path_.string() + ": /: expected a JSON object");
+  }
+
+  bool has(const std::string& key) const { return doc_.contains(key); }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const {
+    throw InputError(path_.string() + ": /" + key + ": " + message);
+  }
+
+  double number(const std::string& key) const {
+    if (!has(key)) fail(key, "missing (required number)");
+    const json& value = doc_.at(key);
+    if (!value.is_number()) fail(key, "expected a number, found " + std::string(value.type_name()));
+    const double result = value.get<double>();
+    if (!std::isfinite(result)) fail(key, "must be finite");
+    return result;
+  }
+
+  double positive(const std::string& key) const {
+    const double value = number(key);
+    if (!(value > 0.0)) fail(key, "must be > 0, found " + formatNumber(value));
+    return value;
+  }
+
+  double nonzero(const std::string& key) const {
+    const double value = number(key);
+    if (value == 0.0) fail(key, "must not be 0 (it scales DAQ units to physical units)");
+    return value;
+  }
+
+  int repeat(std::optional<int> default_value) const {
+    if (!has("repeat")) {
+      if (default_value) return *default_value;
+      fail("repeat", "missing (required integer >= 1)");
+    }
+    const json& value = doc_.at("repeat");
+    if (!value.is_number_integer() || value.get<long long>() < 1) fail("repeat", "expected an integer >= 1, found " + value.dump());
+    return value.get<int>();
+  }
+
+  std::string text(const std::string& key) const {
+    if (!has(key)) fail(key, "missing (required string)");
+    const json& value = doc_.at(key);
+    if (!value.is_string() || value.get<std::string>().empty()) fail(key, "expected a non-empty string, found " + value.dump());
+    return value.get<std::string>();
+  }
+
+  bool flag(const std::string& key, bool default_value) const {
+    if (!has(key)) return default_value;
+    const json& value = doc_.at(key);
+    if (!value.is_boolean()) fail(key, "expected true or false, found " + value.dump());
+    return value.get<bool>();
+  }
+
+ private:
+  fs::path path_;
+  json doc_;
+};
+
+// --- CSV -------------------------------------------------------------------------------------
+
+struct ColumnSpec {
+  std::string name;
+  bool required;
+  std::vector<double>* target;
+};
+
+struct Table {
+  std::vector<std::string> header;
+  std::size_t header_line = 0;
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::size_t> row_line;
+};
+
+Table readTable(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": cannot open the recording");
+  Table table;
+  std::string raw;
+  std::size_t line_number = 0;
+  while (std::getline(in, raw)) {
+    ++line_number;
+    const std::string line = trim(raw);
+    if (line.empty()) continue;
+    if (line.front() == '#') {
+      if (line.rfind("# incomplete", 0) == 0)
+        throw InputError(path.string() + ":" + std::to_string(line_number) + ":1: the recording is marked incomplete (" + line + ")");
+      continue;
+    }
+    if (table.header.empty()) {
+      table.header = splitCells(line);
+      table.header_line = line_number;
+      continue;
+    }
+    auto cells = splitCells(line);
+    if (cells.size() != table.header.size()) {
+      std::string detail;
+      if (cells.size() < table.header.size())
+        detail = "column '" + table.header[cells.size()] + "' (" + std::to_string(cells.size() + 1) + ") is missing";
+      else
+        detail = "cell " + std::to_string(table.header.size() + 1) + " has no column in the header";
+      throw InputError(path.string() + ":" + std::to_string(line_number) + ":" + std::to_string(std::min(cells.size(), table.header.size()) + 1) +
+                       ": row has " + std::to_string(cells.size()) + " cells but the header (line " + std::to_string(table.header_line) +
+                       ") has " + std::to_string(table.header.size()) + ": " + detail);
+    }
+    table.rows.push_back(std::move(cells));
+    table.row_line.push_back(line_number);
+  }
+  if (table.header.empty()) throw InputError(path.string() + ": empty file (expected a header line)");
+  return table;
+}
+
+std::size_t findColumn(const Table& table, const fs::path& path, const std::string& name, bool required) {
+  const auto it = std::find(table.header.begin(), table.header.end(), name);
+  if (it == table.header.end()) {
+    if (!required) return table.header.size();
+    std::string present;
+    for (const auto& h : table.header) present += (present.empty() ? "'" : ", '") + h + "'";
+    throw InputError(path.string() + ":" + std::to_string(table.header_line) + ": missing column '" + name + "' (header has " + present + ")");
+  }
+  if (std::find(it + 1, table.header.end(), name) != table.header.end())
+    throw InputError(path.string() + ":" + std::to_string(table.header_line) + ": column '" + name + "' appears twice in the header");
+  return static_cast<std::size_t>(it - table.header.begin());
+}
+
+double parseCell(const std::string& cell, const fs::path& path, std::size_t line, std::size_t column, const std::string& name) {
+  double value = 0.0;
+  const char* begin = cell.data();
+  const char* end = cell.data() + cell.size();
+  if (!cell.empty() && *begin == '+') ++begin;
+  const auto [ptr, ec] = std::from_chars(begin, end, value);
+  const std::string where = path.string() + ":" + std::to_string(line) + ":" + std::to_string(column + 1) + ": column '" + name + "': ";
+  if (cell.empty()) throw InputError(where + "empty cell (expected a number)");
+  if (ec != std::errc() || ptr != end) throw InputError(where + "cannot read '" + cell + "' as a number");
+  if (!std::isfinite(value)) throw InputError(where + "'" + cell + "' is not a finite number");
+  return value;
+}
+
+}  // namespace
+
+std::string CaseKey::label() const {
+  std::ostringstream out;
+  out << tool << '_';
+  if (kind == CaseKind::SoilBin) out << depth_mm << "mm";
+  else out << mass_kg << "kg";
+  std::string result = out.str();
+  for (char& c : result)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) c = '-';
+  return result;
+}
+
+std::string CaseKey::title() const {
+  std::ostringstream out;
+  out << tool << ", ";
+  if (kind == CaseKind::SoilBin) out << depth_mm << " mm depth";
+  else out << mass_kg << " kg weight";
+  return out.str();
+}
+
+std::string Recording::where(std::size_t sample) const {
+  return csv_path.string() + ":" + std::to_string(sample < line.size() ? line[sample] : 0);
+}
+
+Recording readRecording(const fs::path& csv_path) {
+  Recording rec;
+  rec.csv_path = csv_path;
+  rec.sidecar_path = fs::path(csv_path).replace_extension(".json");
+  const Table table = readTable(csv_path);
+  const Sidecar sidecar(rec.sidecar_path);
+
+  // Case from the sidecar.
+  rec.key.tool = sidecar.text("tool");
+  const bool has_depth = sidecar.has("depth_mm");
+  const bool has_mass = sidecar.has("mass_kg");
+  if (has_depth == has_mass)
+    sidecar.fail(has_depth ? "mass_kg" : "depth_mm",
+                 "give exactly one of depth_mm (soil-bin run) and mass_kg (calibration-weight run)");
+  if (has_depth) {
+    rec.key.kind = CaseKind::SoilBin;
+    rec.key.depth_mm = sidecar.positive("depth_mm");
+  } else {
+    rec.key.kind = CaseKind::CalibrationWeight;
+    rec.key.mass_kg = sidecar.positive("mass_kg");
+  }
+  const bool soil_bin = rec.key.kind == CaseKind::SoilBin;
+
+  // Format from the time column.
+  const bool raw_time = std::find(table.header.begin(), table.header.end(), "t") != table.header.end();
+  const bool calibrated_time = std::find(table.header.begin(), table.header.end(), "t_s") != table.header.end();
+  if (raw_time == calibrated_time)
+    throw InputError(csv_path.string() + ":" + std::to_string(table.header_line) +
+                     (raw_time ? ": both 't' and 't_s' columns: cannot tell raw from calibrated format"
+                               : ": missing time column: expected 't' (raw recording, with force, deformation) or 't_s' (calibrated or simulated, with force_N, deformation_mm)"));
+  std::vector<ColumnSpec> specs;
+  if (raw_time) {
+    rec.format = RecordingFormat::Raw;
+    specs = {{"t", true, &rec.time_s}, {"force", true, &rec.force}, {"deformation", true, &rec.deformation}};
+    rec.repeat = sidecar.repeat(std::nullopt);
+    rec.sample_rate_hz = sidecar.positive("sample_rate_hz");
+    rec.force_factor_N_per_unit = sidecar.nonzero("force_factor");
+    rec.deformation_factor_mm_per_unit = sidecar.nonzero("deformation_factor");
+    if (soil_bin) rec.stroke_mm = sidecar.positive("stroke_mm");
+  } else {
+    rec.format = RecordingFormat::Calibrated;
+    specs = {{"t_s", true, &rec.time_s}, {"force_N", true, &rec.force}, {"deformation_mm", true, &rec.deformation},
+             {"displacement_mm", soil_bin, &rec.displacement_mm}, {"tilt_deg", false, &rec.tilt_deg}};
+    rec.repeat = sidecar.repeat(1);
+    if (!sidecar.flag("complete", true)) sidecar.fail("complete", "the run is marked incomplete (complete: false)");
+  }
+
+  std::vector<std::size_t> column_index;
+  for (const auto& spec : specs) column_index.push_back(findColumn(table, csv_path, spec.name, spec.required));
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    for (std::size_t s = 0; s < specs.size(); ++s) {
+      const std::size_t c = column_index[s];
+      if (c == table.header.size()) continue;  // optional column absent
+      specs[s].target->push_back(parseCell(table.rows[r][c], csv_path, table.row_line[r], c, specs[s].name));
+    }
+    rec.line.push_back(table.row_line[r]);
+  }
+  if (!soil_bin) rec.displacement_mm.clear();  // a displacement column has no meaning for a weight drop
+
+  if (rec.size() < 2)
+    throw InputError(csv_path.string() + ":" + std::to_string(table.header_line) + ": only " + std::to_string(rec.size()) +
+                     " data rows (need at least 2)");
+  const std::size_t time_column = column_index[0];
+  for (std::size_t i = 1; i < rec.size(); ++i) {
+    if (!(rec.time_s[i] > rec.time_s[i - 1]))
+      throw InputError(csv_path.string() + ":" + std::to_string(rec.line[i]) + ":" + std::to_string(time_column + 1) + ": column '" +
+                       specs[0].name + "': time " + formatNumber(rec.time_s[i]) + " s does not increase (previous row, line " +
+                       std::to_string(rec.line[i - 1]) + ", has " + formatNumber(rec.time_s[i - 1]) + " s)");
+  }
+  if (rec.format == RecordingFormat::Raw) {
+    std::vector<double> steps(rec.size() - 1);
+    for (std::size_t i = 1; i < rec.size(); ++i) steps[i - 1] = rec.time_s[i] - rec.time_s[i - 1];
+    std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+    const double median_step = steps[steps.size() / 2];
+    const double expected_step = 1.0 / rec.sample_rate_hz;
+    if (std::abs(median_step - expected_step) > 0.02 * expected_step)
+      sidecar.fail("sample_rate_hz", "does not match the recording: " + formatNumber(rec.sample_rate_hz) + " Hz in the sidecar but column 't' of " +
+                                         csv_path.string() + " advances by " + formatNumber(median_step) + " s per row (" +
+                                         formatNumber(1.0 / median_step) + " Hz)");
+  }
+  return rec;
+}
+
+std::vector<Recording> readRecordings(const std::vector<fs::path>& paths) {
+  std::vector<fs::path> files;
+  for (const auto& path : paths) {
+    if (fs::is_directory(path)) {
+      std::vector<fs::path> found;
+      for (const auto& entry : fs::directory_iterator(path))
+        if (entry.is_regular_file() && entry.path().extension() == ".csv") found.push_back(entry.path());
+      if (found.empty()) throw InputError(path.string() + ": directory holds no *.csv recording");
+      std::sort(found.begin(), found.end());
+      files.insert(files.end(), found.begin(), found.end());
+    } else if (fs::exists(path)) {
+      files.push_back(path);
+    } else {
+      throw InputError(path.string() + ": no such file or directory");
+    }
+  }
+  if (files.empty()) throw InputError("no recordings given");
+
+  std::vector<Recording> recordings;
+  std::map<CaseKey, std::size_t> first_of_case;
+  std::map<std::pair<CaseKey, int>, std::size_t> repeat_owner;
+  for (const auto& file : files) {
+    Recording rec = readRecording(file);
+    const auto [it, inserted] = first_of_case.emplace(rec.key, recordings.size());
+    if (!inserted) {
+      const Recording& first = recordings[it->second];
+      if (first.format != rec.format)
+        throw InputError(rec.sidecar_path.string() + ": case " + rec.key.title() + " mixes raw and calibrated recordings (" +
+                         first.csv_path.string() + " is in the other format)");
+      if (first.stroke_mm != rec.stroke_mm)
+        throw InputError(rec.sidecar_path.string() + ": /stroke_mm: " + formatNumber(rec.stroke_mm) + " mm differs from " +
+                         formatNumber(first.stroke_mm) + " mm in " + first.sidecar_path.string() + " (same case " + rec.key.title() + ")");
+    }
+    const auto [owner, fresh] = repeat_owner.emplace(std::make_pair(rec.key, rec.repeat), recordings.size());
+    if (!fresh)
+      throw InputError(rec.sidecar_path.string() + ": /repeat: repeat " + std::to_string(rec.repeat) + " of case " + rec.key.title() +
+                       " is also claimed by " + recordings[owner->second].sidecar_path.string());
+    recordings.push_back(std::move(rec));
+  }
+  return recordings;
+}
+
+}  // namespace demfem::analysis

@@ -1,0 +1,170 @@
+// JSON form of the evaluate / compare results: units in every key name, null for undefined values.
+#include "demfem/analysis/workflow.hpp"
+
+#include <cmath>
+
+namespace demfem::analysis {
+namespace {
+
+using nlohmann::json;
+
+json number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+json optionalNumber(const std::optional<double>& value) { return value ? number(*value) : json(nullptr); }
+
+json caseJson(const CaseKey& key) {
+  json j{{"tool", key.tool}, {"label", key.label()}};
+  if (key.kind == CaseKind::SoilBin) j["depth_mm"] = key.depth_mm;
+  else j["mass_kg"] = key.mass_kg;
+  return j;
+}
+
+json statsJson(const SignalStatistics& s, const std::string& unit) {
+  return {{"mean_" + unit, number(s.mean)}, {"std_" + unit, number(s.std_dev)}, {"samples", s.samples}};
+}
+
+json settingsJson(const AnalysisSettings& settings) {
+  const auto& e = settings.evaluation;
+  return {{"start_fractions", {e.start_low_fraction, e.start_high_fraction}},
+          {"baseline_duration_s", e.baseline_duration_s},
+          {"end_signal", e.end_signal == EndSignal::Force ? "force" : "deformation"},
+          {"window_begin_mm", e.window_begin_mm},
+          {"window_end_mm", e.window_end_mm},
+          {"steady_fraction", settings.step_response.steady_fraction},
+          {"fft_low_Hz", number(settings.fft_low_Hz)},
+          {"fft_high_Hz", number(settings.fft_high_Hz)}};
+}
+
+json runJson(const EvaluatedRun& run) {
+  json j = caseJson(run.key);
+  j["repeat"] = run.repeat;
+  j["source"] = run.source.string();
+  j["section_2_3_applied"] = run.section_2_3_applied;
+  if (run.section_2_3_applied) {
+    j["start_time_s"] = run.start_time_s;
+    j["end_time_s"] = run.end_time_s;
+    j["initial_deformation_mm"] = run.initial_deformation_mm;
+    j["max_deformation_mm"] = run.max_deformation_mm;
+  }
+  j["samples"] = run.curve.size();
+  j["window_force"] = statsJson(run.window.force_N, "N");
+  j["window_deformation"] = statsJson(run.window.deformation_mm, "mm");
+  if (run.window.tilt_deg) j["window_tilt"] = statsJson(*run.window.tilt_deg, "deg");
+  return j;
+}
+
+json pooledJson(const PooledCase& c) {
+  json j = caseJson(c.key);
+  j["repeats"] = c.repeats;
+  j["force_mean_N"] = number(c.force_mean_N);
+  j["force_std_N"] = number(c.force_std_N);
+  j["force_between_repeats_std_N"] = optionalNumber(c.force_between_repeats_std_N);
+  j["deformation_mean_mm"] = number(c.deformation_mean_mm);
+  j["deformation_std_mm"] = number(c.deformation_std_mm);
+  j["deformation_between_repeats_std_mm"] = optionalNumber(c.deformation_between_repeats_std_mm);
+  return j;
+}
+
+json responseJson(const StepResponse& r, const std::string& unit) {
+  return {{"steady_value_" + unit, number(r.steady_value)},
+          {"steady_std_" + unit, number(r.steady_std)},
+          {"frequency_mean_Hz", number(r.frequency_mean_Hz)},
+          {"frequency_std_Hz", number(r.frequency_std_Hz)},
+          {"damping_ratio_mean", number(r.damping_ratio_mean)},
+          {"damping_ratio_std", number(r.damping_ratio_std)},
+          {"periods", r.cycle_frequencies_Hz.size()},
+          {"decrements", r.cycle_damping_ratios.size()},
+          {"first_peak_time_s", number(r.first_peak_time_s)}};
+}
+
+json summaryJson(const ResponseSummary& s, const std::string& unit) {
+  return {{"steady_value_mean_" + unit, number(s.steady.mean)},   {"steady_value_std_" + unit, number(s.steady.std_dev)},
+          {"frequency_mean_Hz", number(s.frequency_Hz.mean)},      {"frequency_std_Hz", number(s.frequency_Hz.std_dev)},
+          {"frequency_cycles", s.frequency_Hz.samples},            {"damping_ratio_mean", number(s.damping_ratio.mean)},
+          {"damping_ratio_std", number(s.damping_ratio.std_dev)}, {"damping_decrements", s.damping_ratio.samples}};
+}
+
+json calibrationCaseJson(const CalibrationCase& c) {
+  json j = caseJson(c.key);
+  j["repeats"] = c.repeats;
+  j["force"] = summaryJson(c.force, "N");
+  j["deformation"] = summaryJson(c.deformation, "mm");
+  return j;
+}
+
+json fitJson(const PowerLawFit& fit, const std::string& unit) {
+  return {{"a_" + unit + "_at_1Hz", number(fit.a)}, {"b", number(fit.b)}, {"log10_a_std_error", number(fit.log10_a_std_error)},
+          {"b_std_error", number(fit.b_std_error)}, {"r_squared_log", number(fit.r_squared_log)}, {"points", fit.points},
+          {"f_low_Hz", number(fit.f_low_Hz)},       {"f_high_Hz", number(fit.f_high_Hz)}};
+}
+
+json spectralJson(const SpectralComparison& s, const std::string& unit) {
+  return {{"measured_fit", fitJson(s.measured_fit, unit)},
+          {"simulated_fit", fitJson(s.simulated_fit, unit)},
+          {"amplitude_ratio_at_1Hz", number(s.amplitude_ratio_at_1Hz)},
+          {"mean_fitted_amplitude_ratio", number(s.mean_fitted_ratio)}};
+}
+
+json differencesJson(const ResponseSummary& m, const ResponseSummary& s) {
+  return {{"steady_value_difference_percent", number(percentDifference(m.steady.mean, s.steady.mean))},
+          {"frequency_difference_percent", number(percentDifference(m.frequency_Hz.mean, s.frequency_Hz.mean))},
+          {"damping_ratio_difference_percent", number(percentDifference(m.damping_ratio.mean, s.damping_ratio.mean))}};
+}
+
+}  // namespace
+
+json toJson(const EvaluationResult& result, const AnalysisSettings& settings) {
+  json j;
+  j["settings"] = settingsJson(settings);
+  j["soil_bin_runs"] = json::array();
+  for (const auto& r : result.soil_bin_runs) j["soil_bin_runs"].push_back(runJson(r));
+  j["soil_bin_cases"] = json::array();
+  for (const auto& c : result.soil_bin_cases) j["soil_bin_cases"].push_back(pooledJson(c));
+  j["calibration_runs"] = json::array();
+  for (const auto& r : result.calibration_runs) {
+    json run = caseJson(r.key);
+    run["repeat"] = r.repeat;
+    run["source"] = r.source.string();
+    run["force"] = responseJson(r.force, "N");
+    run["deformation"] = responseJson(r.deformation, "mm");
+    j["calibration_runs"].push_back(run);
+  }
+  j["calibration_cases"] = json::array();
+  for (const auto& c : result.calibration_cases) j["calibration_cases"].push_back(calibrationCaseJson(c));
+  return j;
+}
+
+json toJson(const ComparisonResult& result, const AnalysisSettings& settings) {
+  json j;
+  j["settings"] = settingsJson(settings);
+  j["soil_bin_cases"] = json::array();
+  for (const auto& c : result.soil_bin) {
+    json item = caseJson(c.key);
+    item["measured"] = pooledJson(c.measured);
+    item["simulated"] = pooledJson(c.simulated);
+    item["force_mean_difference_percent"] = number(c.force_difference_percent);
+    item["deformation_mean_difference_percent"] = number(c.deformation_difference_percent);
+    item["force_spectrum"] = spectralJson(c.force_spectrum, "N");
+    item["deformation_spectrum"] = spectralJson(c.deformation_spectrum, "mm");
+    j["soil_bin_cases"].push_back(item);
+  }
+  j["calibration_cases"] = json::array();
+  for (const auto& c : result.calibration) {
+    json item = caseJson(c.key);
+    item["measured"] = calibrationCaseJson(c.measured);
+    item["simulated"] = calibrationCaseJson(c.simulated);
+    item["force_differences"] = differencesJson(c.measured.force, c.simulated.force);
+    item["deformation_differences"] = differencesJson(c.measured.deformation, c.simulated.deformation);
+    item["correlations"] = json::array();
+    for (const auto& corr : c.correlations)
+      item["correlations"].push_back({{"measured_repeat", corr.measured_repeat},
+                                      {"force_correlation", number(corr.force.correlation)},
+                                      {"force_shift_s", number(corr.force.shift_s)},
+                                      {"deformation_correlation", number(corr.deformation.correlation)},
+                                      {"deformation_shift_s", number(corr.deformation.shift_s)}});
+    j["calibration_cases"].push_back(item);
+  }
+  j["unmatched_cases"] = result.unmatched_cases;
+  return j;
+}
+
+}  // namespace demfem::analysis
