@@ -1,0 +1,123 @@
+#include "demfem/protocol/transport.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <thread>
+
+using namespace demfem::protocol;
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Echo server on its own thread: answers `count` requests with the request itself.
+std::thread echo(ServerSocket& server, int count, std::chrono::milliseconds wait = 5s) {
+  return std::thread([&server, count, wait] {
+    for (int i = 0; i < count; ++i) {
+      auto request = server.receive(wait);
+      if (!request) return;
+      server.send(*request);
+    }
+  });
+}
+
+fs::path freshDir(const std::string& name) {
+  std::random_device rd;
+  const fs::path dir = fs::temp_directory_path() / ("demfem-" + name + "-" + std::to_string(rd()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+}  // namespace
+
+TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]") {
+  const fs::path dir = freshDir("ipc");
+  for (const std::string endpoint : {std::string("inproc://transport-test"), "ipc://" + (dir / "s").string(),
+                                     std::string("tcp://127.0.0.1:*")}) {
+    zmq::context_t context(1);
+    ServerSocket server(context, endpoint);
+    auto thread = echo(server, 1);
+    ClientSocket client(context, server.endpoint(), 5s);
+    const Multipart message{R"({"v":1})", std::string("\0\1\2\3", 4), ""};
+    CHECK(client.request(message) == message);
+    thread.join();
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a client whose server never answers times out with a message saying the peer is gone", "[protocol]") {
+  zmq::context_t context(1);
+  ServerSocket silent(context, "tcp://127.0.0.1:*");
+  ClientSocket client(context, silent.endpoint(), 300ms);
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    client.request({"{}"});
+    FAIL("no timeout");
+  } catch (const ProtocolError& e) {
+    CHECK(e.code() == WireError::Timeout);
+    CHECK_THAT(e.what(), Catch::Contains("peer is gone"));
+  }
+  CHECK(std::chrono::steady_clock::now() - start < 3s);
+  // The REQ socket is now unusable; it says so instead of hanging.
+  CHECK_THROWS_AS(client.request({"{}"}), ProtocolError);
+}
+
+TEST_CASE("a server receive returns nothing after its timeout", "[protocol]") {
+  zmq::context_t context(1);
+  ServerSocket server(context, "inproc://idle");
+  CHECK_FALSE(server.receive(50ms).has_value());
+}
+
+TEST_CASE("binding tcp to a non-loopback address needs CurveZMQ keys", "[protocol]") {
+  CHECK_NOTHROW(checkBindEndpoint("tcp://127.0.0.1:5555", false));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://localhost:*", false));
+  CHECK_NOTHROW(checkBindEndpoint("ipc:///run/demfem.sock", false));
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://*:5555", false), Catch::Contains("--curve-keys"));
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://0.0.0.0:5555", false), Catch::Contains("non-loopback"));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://*:5555", true));
+  CHECK_THROWS_AS(checkBindEndpoint("udp://127.0.0.1:1", false), std::invalid_argument);
+}
+
+TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is refused", "[protocol]") {
+  const fs::path keys = freshDir("keys"), other = freshDir("other-keys");
+  writeCurveKeyDirectory(keys);
+  writeCurveKeyDirectory(other);
+  CHECK((fs::status(keys / "client.secret").permissions() & fs::perms::others_read) == fs::perms::none);
+  zmq::context_t context(1);
+  ServerSocket server(context, "tcp://127.0.0.1:*", loadServerSecurity(keys));
+  auto thread = echo(server, 1);
+  {
+    ClientSocket good(context, server.endpoint(), 5s, loadClientSecurity(keys));
+    CHECK(good.request({"hi"}) == Multipart{"hi"});
+  }
+  thread.join();
+
+  // Knows the server's public key but holds a key pair the server does not accept.
+  ClientSecurity intruder = loadClientSecurity(keys);
+  intruder.client = loadClientSecurity(other).client;
+  auto listener = echo(server, 1, 1s);
+  ClientSocket bad(context, server.endpoint(), 3s, intruder);
+  try {
+    bad.request({"let me in"});
+    FAIL("a client with the wrong key was served");
+  } catch (const ProtocolError& e) {
+    CHECK(e.code() == WireError::PeerGone);
+    CHECK_THAT(e.what(), Catch::Contains("CurveZMQ"));
+  }
+  listener.join();  // the server saw no request (receive timed out)
+  fs::remove_all(keys);
+  fs::remove_all(other);
+}
+
+TEST_CASE("a missing or malformed key file is named in the error", "[protocol]") {
+  const fs::path dir = freshDir("badkeys");
+  CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("server.pub"));
+  writeCurveKeyDirectory(dir);
+  { std::ofstream(dir / "client.pub") << "short\n"; }
+  CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("40-character"));
+  fs::remove_all(dir);
+}
