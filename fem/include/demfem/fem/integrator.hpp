@@ -82,6 +82,8 @@ class ThreeLevelIntegrator {
   std::vector<int> free_, fixed_;
   Eigen::MatrixXd A1_, A2_, A3_;            // Eq (6)-(8), all DOFs
   Eigen::LLT<Eigen::MatrixXd> A1_free_;     // A1 on the free DOFs, factorized once
+  Eigen::MatrixXd K_;                       // for start(): static equilibrium and its reactions
+  Eigen::LLT<Eigen::MatrixXd> K_free_;
   IntegratorState state_;
 };
 

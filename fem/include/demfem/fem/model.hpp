@@ -46,8 +46,8 @@ struct Material {
 };
 
 // Gauss rule per direction for Hex20 stiffness: 2 = reduced (as CalculiX C3D20R), 3 = full (C3D20).
-// Mass is always integrated with the full rule (consistent mass). Tet10 always uses 4-point
-// stiffness and 15-point (degree 5) mass rules.
+// Mass is always integrated with the full rule (consistent mass). Tet10 uses a 64-point collapsed
+// Gauss rule (exact to degree 5) for both.
 enum class HexIntegration { Reduced, Full };
 
 // Consistent stiffness and mass matrices of `mesh` (3 DOF per node). Throws std::invalid_argument
