@@ -1,11 +1,299 @@
 #include "demfem/backends/builtin/backend.hpp"
 
+#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/backends/builtin/simulation.hpp"
+#include "demfem/backends/builtin/soil_bin.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+
 namespace demfem::builtin {
 
-// Placeholder until the builtin backend issue lands: says clearly which part is missing.
-std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study&) {
-  throw adapter::CouplingError(adapter::ErrorCode::Unsupported,
-                               "the builtin DEM backend is not built yet (builtin backend issue)");
+namespace {
+
+using adapter::CouplingError;
+using adapter::ErrorCode;
+
+constexpr char kCheckpointMagic[8] = {'D', 'F', 'B', 'K', 'E', 'N', 'D', '1'};
+constexpr double kInsertionClearance_m = 0.005;  // tool tip starts this far above the fill surface
+
+TriangleMesh toolMesh(const study::Tool& tool) {
+  if (tool.geometry.kind != study::GeometryKind::Plate)
+    throw CouplingError(ErrorCode::Unsupported, "builtin DEM: tool '" + tool.name +
+                                                    "': only plate tools are meshed by the builtin backend so far");
+  const auto surface = adapter::makePlateSurface(tool.geometry.length_m, tool.geometry.width_m, tool.geometry.thickness_m,
+                                                 tool.geometry.keypoint_spacing_m);
+  TriangleMesh mesh;
+  mesh.name = tool.name;
+  for (const auto& n : surface.nodes) mesh.rest_nodes.push_back({n[0], n[1], n[2]});
+  mesh.nodes = mesh.rest_nodes;
+  mesh.triangles = surface.triangles;
+  return mesh;
+}
+
+class BuiltinBackend final : public adapter::CouplingApi {
+ public:
+  BuiltinBackend(const study::Study& study, const SettledSoil& soil)
+      : study_(study), sim_(study.soil, binDomain(study.soil), study.dem.threads) {
+    addBinWalls(sim_, study.soil);
+    addSettledParticles(sim_, study.soil, soil);
+    for (const auto& tool : study.tools) {
+      TriangleMesh mesh = toolMesh(tool);
+      mesh.material = sim_.materials().index(tool.dem_material);
+      const int m = sim_.addMesh(std::move(mesh));
+      meshes_[tool.name] = m;
+      // Tip above the surface at the start of the stroke, front face (local z = +T/2) at start_z.
+      sim_.setMeshMotion(m,
+                         {0, study.soil.fill_height_m + kInsertionClearance_m,
+                          tool.motion.start_z_m - tool.geometry.thickness_m / 2},
+                         {0, 0, 0}, 0);
+    }
+    sim_.setTimeStep(studyTimeStep(sim_, study.dem));
+    insertTools();
+    if (study.output.vtk_every > 0) {
+      vtk_interval_ = study.output.vtk_every * study.fem.dt_s;
+      next_vtk_ = sim_.time();
+    }
+    last_positions_time_ = sim_.time();
+  }
+
+  adapter::BackendInfo info() override {
+    alive();
+    return {"builtin", "0.1", 1, sim_.timeStep()};
+  }
+
+  std::vector<adapter::GeometryInfo> geometries() override {
+    alive();
+    std::vector<adapter::GeometryInfo> out;
+    for (const auto& tool : study_.tools) {
+      const auto& mesh = sim_.mesh(meshes_.at(tool.name));
+      out.push_back({tool.name, static_cast<std::int32_t>(mesh.nodes.size()), mesh.triangles});
+    }
+    return out;
+  }
+
+  double time() override {
+    alive();
+    return sim_.time();
+  }
+
+  adapter::NodeArray nodePositions(const std::string& geometry) override {
+    const auto& mesh = sim_.mesh(meshOf(geometry));
+    adapter::NodeArray out;
+    out.reserve(mesh.nodes.size() * 3);
+    for (const auto& n : mesh.nodes) out.insert(out.end(), n.begin(), n.end());
+    return out;
+  }
+
+  adapter::NodeArray nodeForces(const std::string& geometry, adapter::ForceMode mode) override {
+    const int m = meshOf(geometry);
+    if (mode == adapter::ForceMode::Instantaneous) return sim_.nodeForces(m);
+    return interval_mean_.count(m) ? interval_mean_.at(m) : adapter::NodeArray(sim_.nodeForces(m).size(), 0.0);
+  }
+
+  void setNodePositions(const std::string& geometry, const adapter::NodeArray& xyz) override {
+    const int m = meshOf(geometry);
+    const auto n = sim_.mesh(m).nodes.size();
+    if (xyz.size() != 3 * n)
+      throw CouplingError(ErrorCode::SizeMismatch, "builtin DEM: geometry '" + geometry + "' has " + std::to_string(n) +
+                                                       " nodes (" + std::to_string(3 * n) + " values), got " +
+                                                       std::to_string(xyz.size()) + " values");
+    std::vector<Vec3> local(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      local[k] = {xyz[3 * k], xyz[3 * k + 1], xyz[3 * k + 2]};
+      for (double c : local[k])
+        if (!std::isfinite(c))
+          throw CouplingError(ErrorCode::BadRequest, "builtin DEM: geometry '" + geometry + "' node " + std::to_string(k) +
+                                                         " position is not finite");
+    }
+    sim_.setNodePositions(m, local, sim_.time() - last_positions_time_);
+    last_positions_time_ = sim_.time();
+  }
+
+  void simulate(double duration_s) override {
+    alive();
+    if (!(duration_s >= 0) || !std::isfinite(duration_s))
+      throw CouplingError(ErrorCode::BadRequest, "builtin DEM: simulate() needs a finite duration >= 0, got " +
+                                                     std::to_string(duration_s));
+    const long steps = std::lround(duration_s / sim_.timeStep());
+    if (steps == 0) return;
+    sim_.resetNodeImpulse();
+    try {
+      long done = 0;
+      while (done < steps) {
+        long chunk = steps - done;
+        if (vtk_interval_ > 0) {
+          const long to_vtk = std::lround((next_vtk_ - sim_.time()) / sim_.timeStep());
+          if (to_vtk <= 0) {
+            writeVtk();
+            continue;
+          }
+          chunk = std::min(chunk, to_vtk);
+        }
+        sim_.run(chunk);
+        done += chunk;
+      }
+    } catch (const BlowUp& e) {
+      throw CouplingError(ErrorCode::SimulationFailed, e.what());
+    }
+    const double span = static_cast<double>(steps) * sim_.timeStep();
+    for (const auto& [name, m] : meshes_) {
+      auto mean = sim_.nodeImpulse(m);
+      for (double& f : mean) f /= span;
+      interval_mean_[m] = std::move(mean);
+    }
+  }
+
+  adapter::RigidMotion rigidMotion(const std::string& geometry) override {
+    const auto& mesh = sim_.mesh(meshOf(geometry));
+    return {mesh.origin, mesh.velocity, mesh.t0};
+  }
+
+  void setRigidMotion(const std::string& geometry, const adapter::RigidMotion& motion) override {
+    sim_.setMeshMotion(meshOf(geometry), motion.origin_m, motion.velocity_m_s, motion.t0_s);
+  }
+
+  void checkpoint(const std::filesystem::path& file) override {
+    alive();
+    const auto tmp = file.string() + ".part";
+    {
+      std::ofstream out(tmp, std::ios::binary);
+      if (!out) throw CouplingError(ErrorCode::Internal, file.string() + ": cannot write checkpoint");
+      out.write(kCheckpointMagic, sizeof(kCheckpointMagic));
+      sim_.saveState(out);
+      out.write(reinterpret_cast<const char*>(&last_positions_time_), 8);
+      out.write(reinterpret_cast<const char*>(&next_vtk_), 8);
+      out.write(reinterpret_cast<const char*>(&vtk_count_), 8);
+      const std::uint64_t nm = interval_mean_.size();
+      out.write(reinterpret_cast<const char*>(&nm), 8);
+      for (const auto& [m, f] : interval_mean_) {
+        const std::int64_t id = m;
+        const std::uint64_t len = f.size();
+        out.write(reinterpret_cast<const char*>(&id), 8);
+        out.write(reinterpret_cast<const char*>(&len), 8);
+        out.write(reinterpret_cast<const char*>(f.data()), static_cast<std::streamsize>(len * 8));
+      }
+      if (!out) throw CouplingError(ErrorCode::Internal, file.string() + ": checkpoint write failed");
+    }
+    std::filesystem::rename(tmp, file);
+  }
+
+  void restore(const std::filesystem::path& file) override {
+    alive();
+    std::ifstream in(file, std::ios::binary);
+    char magic[8];
+    in.read(magic, 8);
+    if (!in || std::string(magic, 8) != std::string(kCheckpointMagic, 8))
+      throw CouplingError(ErrorCode::BadRequest, file.string() + ": not a builtin DEM checkpoint");
+    try {
+      sim_.loadState(in);
+    } catch (const std::exception& e) {
+      throw CouplingError(ErrorCode::BadRequest, file.string() + ": " + e.what());
+    }
+    std::uint64_t nm = 0;
+    in.read(reinterpret_cast<char*>(&last_positions_time_), 8);
+    in.read(reinterpret_cast<char*>(&next_vtk_), 8);
+    in.read(reinterpret_cast<char*>(&vtk_count_), 8);
+    in.read(reinterpret_cast<char*>(&nm), 8);
+    interval_mean_.clear();
+    for (std::uint64_t k = 0; k < nm && in; ++k) {
+      std::int64_t id = 0;
+      std::uint64_t len = 0;
+      in.read(reinterpret_cast<char*>(&id), 8);
+      in.read(reinterpret_cast<char*>(&len), 8);
+      if (len > (1u << 28)) break;
+      adapter::NodeArray f(len);
+      in.read(reinterpret_cast<char*>(f.data()), static_cast<std::streamsize>(len * 8));
+      interval_mean_[static_cast<int>(id)] = std::move(f);
+    }
+    if (!in) throw CouplingError(ErrorCode::BadRequest, file.string() + ": truncated builtin DEM checkpoint");
+  }
+
+  void shutdown() override { closed_ = true; }
+
+ private:
+  void alive() const {
+    if (closed_) throw CouplingError(ErrorCode::BadRequest, "builtin DEM: the simulation was shut down");
+  }
+
+  int meshOf(const std::string& geometry) const {
+    alive();
+    const auto it = meshes_.find(geometry);
+    if (it == meshes_.end()) throw CouplingError(ErrorCode::UnknownGeometry, "builtin DEM: no geometry named '" + geometry + "'");
+    return it->second;
+  }
+
+  // Vertical insertion of every tool to its depth, then the drag velocity from the current position.
+  void insertTools() {
+    double longest = 0;
+    for (const auto& tool : study_.tools) {
+      const double travel = kInsertionClearance_m + tool.motion.depth_m;
+      longest = std::max(longest, travel / tool.motion.insertion_velocity_m_s);
+    }
+    for (const auto& tool : study_.tools) {
+      const int m = meshes_.at(tool.name);
+      const auto& mesh = sim_.mesh(m);
+      const double travel = kInsertionClearance_m + tool.motion.depth_m;
+      sim_.setMeshMotion(m, mesh.origin, {0, -travel / longest, 0}, sim_.time());
+    }
+    try {
+      sim_.run(std::lround(longest / sim_.timeStep()));
+    } catch (const BlowUp& e) {
+      throw CouplingError(ErrorCode::SimulationFailed, std::string("during tool insertion: ") + e.what());
+    }
+    for (const auto& tool : study_.tools) {
+      const int m = meshes_.at(tool.name);
+      const auto& mesh = sim_.mesh(m);
+      const Vec3 now = mesh.offset(sim_.time());
+      sim_.setMeshMotion(m, {now[0], study_.soil.fill_height_m - tool.motion.depth_m, now[2]},
+                         {0, 0, tool.motion.velocity_m_s}, sim_.time());
+    }
+  }
+
+  void writeVtk() {
+    const auto dir = study_.output.directory;
+    std::filesystem::create_directories(dir);
+    char index[16];
+    std::snprintf(index, sizeof(index), "%06ld", vtk_count_);
+    sim_.writeParticlesVtk(dir / (std::string("particles_") + index + ".vtk"));
+    for (const auto& [name, m] : meshes_) sim_.writeMeshVtk(m, dir / ("dem-" + name + "_" + index + ".vtk"));
+    ++vtk_count_;
+    next_vtk_ += vtk_interval_;
+  }
+
+  study::Study study_;
+  DemSimulation sim_;
+  std::map<std::string, int> meshes_;
+  std::map<int, adapter::NodeArray> interval_mean_;
+  double last_positions_time_ = 0;
+  double vtk_interval_ = 0, next_vtk_ = 0;
+  long vtk_count_ = 0;
+  bool closed_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study) {
+  try {
+    const auto file = soilFile(study, defaultSoilDirectory());
+    SettledSoil soil;
+    if (std::filesystem::exists(file)) {
+      soil = readSettledSoil(file);
+    } else {
+      DepositReport report;
+      soil = depositSoil(study, study.dem.threads, report, {});
+      writeSettledSoil(file, soil);
+    }
+    return std::make_unique<BuiltinBackend>(study, soil);
+  } catch (const CouplingError&) {
+    throw;
+  } catch (const BlowUp& e) {
+    throw CouplingError(ErrorCode::SimulationFailed, e.what());
+  } catch (const std::exception& e) {
+    throw CouplingError(ErrorCode::BadRequest, e.what());
+  }
 }
 
 }  // namespace demfem::builtin

@@ -1,0 +1,298 @@
+// Contact laws of the built-in DEM (DESIGN.md section 11): the force and torque of one
+// sphere-sphere or sphere-wall contact, for the EDEM-style and the LIGGGHTS 3.8-compatible models.
+//
+// Contract
+// - SI units. Contact normal n points from the wall / particle j towards particle i; delta > 0 is
+//   the overlap; vn = (v_i - v_j) . n (negative while approaching). A wall contact uses R* = R_i and
+//   m* = m_i (LIGGGHTS convention, also EDEM's for a flat wall).
+// - Normal force Fn along +n (repulsive > 0) = elastic/plastic part + viscous part + cohesion (< 0).
+// - The functions are inline and allocation-free; the caller chooses the model outside the loop by
+//   templates (contactForce<Normal, Rolling>), the cohesion model by a switch that never changes.
+// - History per contact (reset to zero when the contact opens, delta <= 0): the tangential spring
+//   displacement (3), the maximum overlap (1, hysteretic models), the elastic rolling torque (3, epsd).
+//
+// Formulas and sources
+// - EDEM hysteretic spring (Walton & Braun 1986, as EDEM documents it): loading stiffness
+//   K1 = 5 R* min(Y_i, Y_j), unloading K2 = K1 / e^2, Fn = max(0, min(K1 delta, K2 (delta - delta0))),
+//   delta0 = delta_max (1 - K1/K2). Dissipation is the hysteresis alone (restitution = e exactly);
+//   documented assumption: the Table 2 "damping factor" D_n acts on the tangential spring only,
+//   c_t = 2 D_n sqrt(m* k_t), and the "stiffness factor" gives k_t = stiffness_factor * K1.
+// - EDEM linear cohesion: Fn_coh = -k_coh A. Documented assumption (the vendor's V2 model uses a
+//   smaller area than V1): A = pi R* delta, the Hertzian contact area, half the geometric overlap
+//   circle used by V1 and by LIGGGHTS sjkr.
+// - EDEM standard rolling friction: torque on i = -mu_r Fn d_i w_hat_i, d_i the centre-to-contact
+//   distance, w_hat_i the particle's own unit angular velocity, Fn the normal contact force
+//   (elastic + viscous, without cohesion, clamped at 0).
+// - LIGGGHTS hooke (normal_model_hooke.h, 3.8): kn = 16/15 sqrt(R*) Y* (15 m* v_c^2 /
+//   (16 sqrt(R*) Y*))^(1/5), Y* = 1 / ((1 - nu_i^2)/Y_i + (1 - nu_j^2)/Y_j), kt = kn,
+//   gamma_n = gamma_t = sqrt(4 m* kn / (1 + (pi / ln e)^2)), Fn = kn delta - gamma_n vn.
+// - LIGGGHTS hooke/hysteresis (Luding; normal_model_hooke_hysteresis.h): k2 grows linearly with
+//   delta_max from kn to k2max = kn * coefficientMaxElasticStiffness, reached at
+//   delta_lim = k2max / (k2max - kn) * coefficientPlasticityDepth * 2 R*; loading along kn delta,
+//   un/reloading along k2 (delta - delta_max) + kn delta_max, adhesive branch floored at -kc delta
+//   (kc = kn * coefficientAdhesionStiffness, delta_max then moved as LIGGGHTS does); plus -gamma_n vn.
+// - LIGGGHTS tangential history (tangential_model_history.h): shear += v_t dt, rotated into the
+//   tangent plane, Ft = -kt shear, capped at mu |Fn| (shear rescaled), otherwise Ft -= gamma_t v_t.
+//   |Fn| is the total normal force (incl. damping and cohesion), as LIGGGHTS computes it.
+// - LIGGGHTS sjkr: A = the overlap circle area, pi/4 * -(r-ri-rj)(r+ri-rj)(r-ri+rj)(r+ri+rj)/r^2,
+//   against a wall pi (R^2 - d^2); sjkr2: A = 4 pi R* delta, against a wall 2 pi R delta.
+// - LIGGGHTS cdt: torque = mu_r (kn delta) R* w_hat_rel (wall: R* -> d_i), torsion part removed,
+//   subtracted from i and added to j.
+// - LIGGGHTS epsd: spring torque += kr w_rel,t dt with kr = 2.25 kn mu_r^2 R*^2, capped at
+//   mu_r R* |Fn|. The study file has no rolling viscous damping, so epsd's dashpot coefficient is 0
+//   (LIGGGHTS coefficientRollingViscousDamping = 0).
+#pragma once
+
+#include "demfem/study/study.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace demfem::builtin {
+
+// Coefficients of one material pair, resolved once from the study (interaction table + materials).
+struct PairLaw {
+  double restitution = 0.5;
+  double friction = 0.5;
+  double rolling_friction = 0;
+  double cohesion_J_m3 = 0;
+  double yield_min_Pa = 0;    // min(Y_i, Y_j): EDEM K1 = 5 R* Y
+  double youngs_eff_Pa = 0;   // Y* of LIGGGHTS hooke
+  double log_restitution = 0; // ln e
+};
+
+// Per-contact stiffness and damping, fixed for a given pair of bodies (computed once per
+// neighbour-list slot or wall contact).
+struct ContactStiffness {
+  double kn = 0;       // loading stiffness (N/m): EDEM K1, LIGGGHTS kn
+  double kt = 0;       // tangential spring (N/m)
+  double gamma_n = 0;  // normal viscous coefficient (N s/m)
+  double gamma_t = 0;  // tangential viscous coefficient (N s/m)
+};
+
+inline ContactStiffness contactStiffness(const study::ContactModel& model, const PairLaw& law,
+                                         double reff, double meff) {
+  ContactStiffness s;
+  if (model.normal == study::NormalModel::EdemHysteretic) {
+    s.kn = 5.0 * reff * law.yield_min_Pa;
+    s.kt = model.stiffness_factor * s.kn;
+    s.gamma_n = 0;
+    s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
+  } else {
+    const double v = model.characteristic_velocity_m_s;
+    const double sq = std::sqrt(reff);
+    s.kn = 16.0 / 15.0 * sq * law.youngs_eff_Pa *
+           std::pow(15.0 * meff * v * v / (16.0 * sq * law.youngs_eff_Pa), 0.2);
+    s.kt = s.kn;
+    const double q = std::numbers::pi / law.log_restitution;
+    s.gamma_n = std::sqrt(4.0 * meff * s.kn / (1.0 + q * q));
+    s.gamma_t = s.gamma_n;
+  }
+  return s;
+}
+
+// Largest spring stiffness a contact with this stiffness can reach (for the time-step criterion).
+inline double stiffestSpring(const study::ContactModel& model, const PairLaw& law, const ContactStiffness& s) {
+  switch (model.normal) {
+    case study::NormalModel::EdemHysteretic: return s.kn / (law.restitution * law.restitution);
+    case study::NormalModel::HookeHysteresis: return s.kn * std::max(1.0, model.coefficient_max_elastic_stiffness);
+    case study::NormalModel::Hooke: break;
+  }
+  return s.kn;
+}
+
+// History slots of one contact; offsets are -1 when the model does not use them.
+struct HistoryLayout {
+  int size = 0;
+  int shear = -1;      // 3 doubles
+  int delta_max = -1;  // 1 double
+  int roll = -1;       // 3 doubles
+  static HistoryLayout of(const study::ContactModel& m) {
+    HistoryLayout h;
+    if (m.tangential_history) { h.shear = h.size; h.size += 3; }
+    if (m.normal != study::NormalModel::Hooke) { h.delta_max = h.size; h.size += 1; }
+    if (m.rolling == study::RollingModel::Epsd) { h.roll = h.size; h.size += 3; }
+    return h;
+  }
+};
+
+// Geometry and kinematics of one contact, filled by the caller.
+struct ContactKinematics {
+  double n[3];        // unit normal, towards i
+  double delta;       // overlap > 0
+  double vn;          // normal relative velocity (v_i - v_j) . n
+  double vt[3];       // tangential relative velocity at the contact point (incl. rotation)
+  double wrel[3];     // w_i - w_j (wall: w_i)
+  double wi[3], wj[3];// angular velocities (wall: wj = 0)
+  double reff;        // R* (wall: R_i)
+  double di, dj;      // centre-to-contact distances (wall: dj = 0)
+  double ri;          // radius of i (wall cohesion areas)
+  double r;           // centre distance (pair) or centre-wall distance (wall)
+  double rj;          // radius of j (pair), 0 for a wall
+};
+
+struct ContactResult {
+  double force[3];    // on i (j gets the opposite)
+  double torque_i[3];
+  double torque_j[3];
+  double normal_force;// Fn along n incl. cohesion (for reporting)
+};
+
+namespace detail {
+inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline void cross3(const double* a, const double* b, double* c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+}  // namespace detail
+
+// Normal force (elastic/plastic + viscous, no cohesion) of normal model N; updates delta_max.
+template <study::NormalModel N>
+inline double normalForce(const study::ContactModel& model, const PairLaw& law, const ContactStiffness& s,
+                          const ContactKinematics& k, double* delta_max) {
+  const double delta = k.delta;
+  if constexpr (N == study::NormalModel::Hooke) {
+    return s.kn * delta - s.gamma_n * k.vn;
+  } else if constexpr (N == study::NormalModel::EdemHysteretic) {
+    // Walton-Braun: loading K1, unloading/reloading K2 = K1/e^2 from delta0 = delta_max (1 - e^2).
+    if (delta > *delta_max) *delta_max = delta;
+    const double k2 = s.kn / (law.restitution * law.restitution);
+    const double delta0 = *delta_max * (1.0 - law.restitution * law.restitution);
+    return std::max(0.0, std::min(s.kn * delta, k2 * (delta - delta0)));
+  } else {
+    // LIGGGHTS hooke/hysteresis (Luding's elasto-plastic adhesive spring).
+    const double kn = s.kn;
+    const double k2max = kn * model.coefficient_max_elastic_stiffness;
+    const double kc = kn * model.coefficient_adhesion_stiffness;
+    if (delta > *delta_max) *delta_max = delta;
+    const double lim = k2max / (k2max - kn) * model.coefficient_plasticity_depth * 2.0 * k.reff;
+    const auto adhesive = [&] {
+      *delta_max = 0.5 * (delta + std::sqrt(delta * delta + 4.0 * ((kn + kc) * delta * lim / (k2max - kn))));
+      return -kc * delta;
+    };
+    double f;
+    if (*delta_max >= lim) {
+      const double trial = k2max * (delta - lim) + kn * lim;
+      f = trial >= -kc * delta ? trial : adhesive();
+    } else {
+      const double k2 = kn + (k2max - kn) * *delta_max / lim;
+      const double trial = k2 * (delta - *delta_max) + kn * *delta_max;
+      if (trial >= kn * delta) f = kn * delta;
+      else f = trial > -kc * delta ? trial : adhesive();
+    }
+    return f - s.gamma_n * k.vn;
+  }
+}
+
+// Cohesive normal force (<= 0) of the selected cohesion model.
+inline double cohesionForce(study::CohesionModel model, const PairLaw& law, const ContactKinematics& k, bool wall) {
+  constexpr double pi = std::numbers::pi;
+  double area = 0;
+  switch (model) {
+    case study::CohesionModel::None: return 0;
+    case study::CohesionModel::EdemLinear: area = pi * k.reff * k.delta; break;
+    case study::CohesionModel::Sjkr:
+      if (wall) {
+        area = pi * (k.ri * k.ri - k.r * k.r);
+      } else {
+        const double r = k.r, a = k.ri, b = k.rj;
+        area = -pi / 4.0 * ((r - a - b) * (r + a - b) * (r - a + b) * (r + a + b)) / (r * r);
+      }
+      break;
+    case study::CohesionModel::Sjkr2: area = wall ? 2.0 * pi * k.ri * k.delta : 4.0 * pi * k.reff * k.delta; break;
+  }
+  return -law.cohesion_J_m3 * area;
+}
+
+// The complete contact: normal, cohesion, tangential (with or without history), rolling.
+// `hist` points to HistoryLayout::size doubles of this contact (may be null if size is 0).
+template <study::NormalModel N, study::RollingModel R>
+inline ContactResult contactForce(const study::ContactModel& model, const HistoryLayout& layout, const PairLaw& law,
+                                  const ContactStiffness& s, const ContactKinematics& k, double dt, double* hist,
+                                  bool wall) {
+  using detail::cross3;
+  using detail::dot3;
+  ContactResult out{};
+  double unused_dmax = 0;
+  double* dmax = layout.delta_max >= 0 ? hist + layout.delta_max : &unused_dmax;
+  const double fn_contact = normalForce<N>(model, law, s, k, dmax);
+  const double fn = fn_contact + cohesionForce(model.cohesion, law, k, wall);
+  out.normal_force = fn;
+
+  // Tangential force (Coulomb friction with a tangential spring).
+  double ft[3];
+  const double limit = law.friction * std::fabs(fn);
+  if (layout.shear >= 0) {
+    double* sh = hist + layout.shear;
+    for (int c = 0; c < 3; ++c) sh[c] += k.vt[c] * dt;
+    const double rsht = dot3(sh, k.n);
+    for (int c = 0; c < 3; ++c) sh[c] -= rsht * k.n[c];
+    for (int c = 0; c < 3; ++c) ft[c] = -s.kt * sh[c];
+    const double shear_force = s.kt * std::sqrt(dot3(sh, sh));
+    if (shear_force > limit) {
+      const double ratio = shear_force > 0 ? limit / shear_force : 0.0;
+      for (int c = 0; c < 3; ++c) {
+        ft[c] *= ratio;
+        sh[c] = -ft[c] / s.kt;
+      }
+    } else {
+      for (int c = 0; c < 3; ++c) ft[c] -= s.gamma_t * k.vt[c];
+    }
+  } else {
+    const double vtm = std::sqrt(dot3(k.vt, k.vt));
+    const double mag = std::min(limit, s.gamma_t * vtm);
+    for (int c = 0; c < 3; ++c) ft[c] = vtm > 0 ? -mag * k.vt[c] / vtm : 0.0;
+  }
+  for (int c = 0; c < 3; ++c) out.force[c] = fn * k.n[c] + ft[c];
+  double nxft[3];
+  cross3(k.n, ft, nxft);
+  for (int c = 0; c < 3; ++c) {
+    out.torque_i[c] = -k.di * nxft[c];
+    out.torque_j[c] = -k.dj * nxft[c];
+  }
+
+  // Rolling resistance.
+  if constexpr (R == study::RollingModel::EdemStandard) {
+    const double f = law.rolling_friction * std::max(0.0, fn_contact);
+    const double wim = std::sqrt(dot3(k.wi, k.wi));
+    const double wjm = std::sqrt(dot3(k.wj, k.wj));
+    for (int c = 0; c < 3; ++c) {
+      if (wim > 0) out.torque_i[c] -= f * k.di * k.wi[c] / wim;
+      if (wjm > 0) out.torque_j[c] -= f * k.dj * k.wj[c] / wjm;
+    }
+  } else if constexpr (R == study::RollingModel::Cdt) {
+    const double wm = std::sqrt(dot3(k.wrel, k.wrel));
+    if (wm > 0) {
+      const double arm = wall ? k.di : k.reff;
+      const double scale = law.rolling_friction * s.kn * k.delta * arm / wm;
+      double tq[3];
+      for (int c = 0; c < 3; ++c) tq[c] = scale * k.wrel[c];
+      const double tn = dot3(tq, k.n);
+      for (int c = 0; c < 3; ++c) {
+        tq[c] -= tn * k.n[c];
+        out.torque_i[c] -= tq[c];
+        out.torque_j[c] += tq[c];
+      }
+    }
+  } else if constexpr (R == study::RollingModel::Epsd) {
+    const double wn = dot3(k.wrel, k.n);
+    const double kr = 2.25 * s.kn * law.rolling_friction * law.rolling_friction * k.reff * k.reff;
+    double* tq = hist + layout.roll;
+    for (int c = 0; c < 3; ++c) tq[c] += kr * (k.wrel[c] - wn * k.n[c]) * dt;
+    const double mag = std::sqrt(dot3(tq, tq));
+    const double cap = std::fabs(fn) * k.reff * law.rolling_friction;
+    if (mag > cap) {
+      const double f = cap / mag;
+      for (int c = 0; c < 3; ++c) tq[c] *= f;
+    }
+    for (int c = 0; c < 3; ++c) {
+      out.torque_i[c] -= tq[c];
+      out.torque_j[c] += tq[c];
+    }
+  }
+  return out;
+}
+
+}  // namespace demfem::builtin

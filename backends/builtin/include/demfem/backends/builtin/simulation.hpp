@@ -1,0 +1,203 @@
+// The built-in DEM engine (DESIGN.md section 5): spheres, plane walls and triangle-mesh walls,
+// velocity-Verlet integration, linked cells + Verlet lists with a skin, OpenMP.
+//
+// Contract
+// - SI units, bin frame (x across, y up, z along the bin; DESIGN.md section 10). Gravity along -y
+//   unless set otherwise.
+// - Data layout (for speed): particle quantities are separate contiguous arrays (structure of
+//   arrays; vectors stored xyz-interleaved); the half neighbour list is CSR (row = particle i, j > i,
+//   sorted), and each list slot owns its contact history and its pair stiffness, so the pair loop
+//   touches flat arrays only. Contact models are template parameters of the pair loop (no virtual
+//   call, no allocation per contact). Lists are rebuilt when any particle or mesh node has moved more
+//   than skin/2 since the last build; contact history is carried over by (i, j) (pairs) and by
+//   (particle, wall, feature) (walls, with the history handed on when a contact slides from one
+//   feature of a mesh to the next).
+// - Determinism: with the same inputs and thread count, results are bit-identical. Each thread sums
+//   pair forces into its own buffer over a static partition of the particles; the buffers are added
+//   in thread order. Wall contacts are gathered in particle order.
+// - Time step: setTimeStep() refuses a step above the stability limit of the stiffest spring
+//   (2 sqrt(m*/k_max), explicit central-difference limit of an undamped oscillator).
+// - Failure: run() throws BlowUp naming the particle, the step and what went wrong (NaN, overlap
+//   beyond overlapLimitFraction() * the smaller radius, centre outside the domain); the simulation
+//   is then left at the failing step (the caller keeps its last checkpoint).
+// - Mesh walls: positions are given in each mesh's local frame; the mesh moves rigidly with its
+//   RigidMotion-style translation and deforms through setNodePositions(). Forces on mesh nodes are
+//   the reactions of the particle contacts, split by barycentric weights (force and moment conserved).
+#pragma once
+
+#include "demfem/backends/builtin/contact_law.hpp"
+#include "demfem/backends/builtin/triangle_mesh.hpp"
+#include "demfem/study/study.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <iosfwd>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace demfem::builtin {
+
+class BlowUp : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Materials and the interaction table of a soil, resolved to indices and PairLaw coefficients.
+struct MaterialTable {
+  std::vector<study::DemMaterial> materials;
+  std::vector<PairLaw> laws;  // materials.size()^2, symmetric
+  int index(const std::string& name) const;  // throws std::invalid_argument naming the material
+  const PairLaw& law(int a, int b) const { return laws[static_cast<std::size_t>(a) * materials.size() + b]; }
+  // Every pair of materials needs an Interaction; throws std::invalid_argument naming a missing pair
+  // or a restitution outside (0, 1].
+  static MaterialTable fromSoil(const study::Soil& soil);
+};
+
+struct PlaneWall {
+  Vec3 point{0, 0, 0};
+  Vec3 normal{0, 1, 0};  // unit, pointing into the particle side
+  int material = 0;
+};
+
+struct Domain {
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};  // a particle centre outside is a blow-up
+};
+
+struct ParticleState {
+  Vec3 x, v{0, 0, 0}, w{0, 0, 0};
+  double radius = 0;
+  int material = 0;
+  int layer = 0;
+};
+
+class DemSimulation {
+ public:
+  DemSimulation(const study::Soil& soil, const Domain& domain, int threads);
+
+  const MaterialTable& materials() const { return table_; }
+  const study::ContactModel& contactModel() const { return model_; }
+
+  // --- setup ---
+  int addParticle(const ParticleState& p);
+  // Keeps only particles with keep[i] != 0 (order preserved); contact history is dropped.
+  void keepParticles(const std::vector<char>& keep);
+  void setParticleMaterial(int i, int material, int layer);
+  int addPlane(const PlaneWall& wall);
+  int addMesh(TriangleMesh mesh);
+  void setGravity(const Vec3& g) { gravity_ = g; }
+  // Sets the step; throws std::invalid_argument if dt <= 0 or above the stability limit.
+  void setTimeStep(double dt);
+  double timeStep() const { return dt_; }
+  // Critical step of a criterion (before the study's fraction is applied): Rayleigh
+  // pi R sqrt(rho/G) / (0.1631 nu + 0.8766) over particle materials at the smallest radius, or the
+  // stiffest spring's contact half period pi sqrt(m*/k_max) over all material pairs and walls.
+  double criticalTimeStep(study::TimeStepCriterion criterion) const;
+  double stabilityLimit() const;  // 2 sqrt(m*/k_max)
+  static constexpr double overlapLimitFraction() { return 0.25; }
+
+  // --- meshes ---
+  int meshCount() const { return static_cast<int>(meshes_.size()); }
+  const TriangleMesh& mesh(int m) const { return meshes_[m]; }
+  // Rigid translation of mesh m (bin frame): x_bin = origin + x_local + velocity (t - t0).
+  void setMeshMotion(int m, const Vec3& origin, const Vec3& velocity, double t0);
+  // New local node positions (deformation); the node velocity used for contact damping is the change
+  // divided by `interval_s` (the time since the previous call; 0 = no velocity).
+  void setNodePositions(int m, const std::vector<Vec3>& local, double interval_s);
+  // Force the particles exert on each node (N, bin frame = local axes): at the last step, and the
+  // impulse accumulated since resetNodeImpulse() (N s).
+  const std::vector<double>& nodeForces(int m) const { return mesh_force_[m]; }
+  const std::vector<double>& nodeImpulse(int m) const { return mesh_impulse_[m]; }
+  void resetNodeImpulse();
+  Vec3 planeForce(int plane) const { return plane_force_[plane]; }  // on the wall, last step
+
+  // --- running ---
+  void run(long steps);
+  double time() const { return time_; }
+  long stepCount() const { return step_; }
+
+  // --- state ---
+  std::size_t particleCount() const { return radius_.size(); }
+  ParticleState particle(std::size_t i) const;
+  double kineticEnergy() const;
+  Vec3 momentum() const;
+  Vec3 angularMomentum() const;  // about the origin, incl. spins
+  double maxOverlap() const;     // largest pair or wall overlap at the last step (m)
+  std::size_t contactCount() const;  // touching pair + wall contacts at the last step
+  std::size_t bytesPerParticle() const;  // memory of all per-particle and per-contact arrays / N
+
+  // Bit-exact state (particles, lists, histories, meshes, time). A restored simulation continues
+  // bit-identically. loadState() requires the same soil (materials, contact model) and threads.
+  void saveState(std::ostream& out) const;
+  void loadState(std::istream& in);
+
+  // Legacy VTK polydata of the particles (radius, layer, velocity) for ParaView.
+  void writeParticlesVtk(const std::filesystem::path& file) const;
+  // Legacy VTK polydata of mesh m in the bin frame (with node force).
+  void writeMeshVtk(int m, const std::filesystem::path& file) const;
+
+ private:
+  struct WallContact {
+    std::int32_t particle, wall;    // wall: plane index, or planes.size() + mesh index
+    std::int64_t key;               // feature key (0 for a plane)
+    double hist[7];
+    std::int32_t nodes[3];
+    double weights[3];
+    double force[3];                // on the particle
+  };
+
+  struct CellGrid;
+  void step();
+  void rebuildLists();
+  void buildNeighbourList(const CellGrid& grid);
+  void buildWallCandidates(const CellGrid& grid);
+  bool listsStale() const;
+  void updateMeshBinNodes();
+  template <study::NormalModel N, study::RollingModel R> void pairForces();
+  template <study::NormalModel N, study::RollingModel R> void wallForces();
+  void computeForces();
+  void checkHealth();
+  ContactStiffness wallStiffness(int i, int wall_material) const;
+  [[noreturn]] void fail(std::size_t particle, const std::string& what) const;
+
+  MaterialTable table_;
+  study::ContactModel model_;
+  HistoryLayout layout_;
+  Domain domain_;
+  int threads_;
+  Vec3 gravity_{0, -9.81, 0};
+  double dt_ = 0, time_ = 0;
+  long step_ = 0;
+  double skin_ = 0;
+  bool lists_valid_ = false;
+
+  // particles (SoA; vectors xyz-interleaved)
+  std::vector<double> x_, v_, w_, f_, t_, x_build_;
+  std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
+  std::vector<std::int32_t> material_, layer_;
+
+  // half neighbour list (CSR) with per-slot stiffness and history
+  std::vector<std::int32_t> nb_start_, nb_j_;
+  std::vector<ContactStiffness> nb_stiff_;
+  std::vector<double> nb_hist_;
+  std::vector<std::uint8_t> nb_touch_;
+
+  // walls
+  std::vector<PlaneWall> planes_;
+  std::vector<TriangleMesh> meshes_;
+  std::vector<std::vector<Vec3>> mesh_bin_nodes_;    // current bin positions
+  std::vector<std::vector<Vec3>> mesh_build_nodes_;  // bin positions at the last list build
+  std::vector<std::int32_t> wc_start_;               // candidate (mesh, triangle) per particle (CSR)
+  std::vector<std::int32_t> wc_mesh_, wc_tri_;
+  std::vector<WallContact> wall_contacts_;           // touching, sorted by particle
+  std::vector<std::int32_t> wall_start_;             // CSR offsets into wall_contacts_
+  std::vector<std::vector<double>> mesh_force_, mesh_impulse_;
+  std::vector<Vec3> plane_force_;
+
+  // per-thread force buffers (threads_ > 1)
+  std::vector<std::vector<double>> thread_f_, thread_t_;
+  // blow-up detection filled by the force loops
+  double max_overlap_ = 0;
+};
+
+}  // namespace demfem::builtin

@@ -1,0 +1,1118 @@
+#include "demfem/backends/builtin/simulation.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <istream>
+#include <limits>
+#include <numbers>
+#include <ostream>
+#include <sstream>
+#include <tuple>
+
+namespace demfem::builtin {
+
+namespace {
+constexpr double kPi = std::numbers::pi;
+constexpr int kMaxWallCandidates = 32;  // touching features per particle before de-duplication
+
+double norm2(const double* a) { return a[0] * a[0] + a[1] * a[1] + a[2] * a[2]; }
+}  // namespace
+
+// ---------------------------------------------------------------- materials
+
+int MaterialTable::index(const std::string& name) const {
+  for (std::size_t i = 0; i < materials.size(); ++i)
+    if (materials[i].name == name) return static_cast<int>(i);
+  throw std::invalid_argument("builtin DEM: material '" + name + "' is not in /soil/materials");
+}
+
+MaterialTable MaterialTable::fromSoil(const study::Soil& soil) {
+  MaterialTable t;
+  t.materials = soil.materials;
+  const std::size_t n = t.materials.size();
+  if (n == 0) throw std::invalid_argument("builtin DEM: /soil/materials is empty");
+  t.laws.resize(n * n);
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = 0; b < n; ++b) {
+      const auto& ma = t.materials[a];
+      const auto& mb = t.materials[b];
+      const study::Interaction* found = nullptr;
+      for (const auto& in : soil.interactions)
+        if ((in.a == ma.name && in.b == mb.name) || (in.a == mb.name && in.b == ma.name)) found = &in;
+      if (!found)
+        throw std::invalid_argument("builtin DEM: /soil/interactions has no entry for the pair '" + ma.name + "' - '" +
+                                    mb.name + "'");
+      if (!(found->restitution > 0 && found->restitution <= 1))
+        throw std::invalid_argument("builtin DEM: /soil/interactions '" + ma.name + "' - '" + mb.name +
+                                    "': restitution must be in (0, 1], got " + std::to_string(found->restitution));
+      PairLaw& law = t.laws[a * n + b];
+      law.restitution = found->restitution;
+      law.friction = found->static_friction;
+      law.rolling_friction = found->rolling_friction;
+      law.cohesion_J_m3 = found->cohesion_J_m3;
+      law.yield_min_Pa = std::min(ma.yield_Pa, mb.yield_Pa);
+      law.youngs_eff_Pa = 1.0 / ((1 - ma.poisson * ma.poisson) / ma.youngs_Pa + (1 - mb.poisson * mb.poisson) / mb.youngs_Pa);
+      law.log_restitution = std::log(std::min(found->restitution, 1.0 - 1e-12));
+    }
+  }
+  return t;
+}
+
+// ---------------------------------------------------------------- construction
+
+DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int threads)
+    : table_(MaterialTable::fromSoil(soil)),
+      model_(soil.contact),
+      layout_(HistoryLayout::of(soil.contact)),
+      domain_(domain),
+      threads_(std::max(1, threads)) {
+  if (model_.normal == study::NormalModel::EdemHysteretic)
+    for (const auto& m : table_.materials)
+      if (!(m.yield_Pa > 0))
+        throw std::invalid_argument("builtin DEM: material '" + m.name +
+                                    "' needs yield_Pa > 0 for the EDEM hysteretic spring (K1 = 5 R* min(Y))");
+  if (model_.normal != study::NormalModel::EdemHysteretic)
+    for (const auto& m : table_.materials)
+      if (!(m.youngs_Pa > 0) || !(m.poisson >= 0 && m.poisson < 0.5))
+        throw std::invalid_argument("builtin DEM: material '" + m.name + "' needs E > 0 and 0 <= nu < 0.5 for hooke models");
+  if (model_.normal == study::NormalModel::HookeHysteresis && !(model_.coefficient_max_elastic_stiffness > 1))
+    throw std::invalid_argument("builtin DEM: hooke/hysteresis needs coefficient_max_elastic_stiffness > 1");
+  for (int c = 0; c < 3; ++c)
+    if (!(domain_.hi[c] > domain_.lo[c])) throw std::invalid_argument("builtin DEM: empty domain");
+  if (threads_ > 1) {
+    thread_f_.resize(threads_);
+    thread_t_.resize(threads_);
+  }
+}
+
+int DemSimulation::addParticle(const ParticleState& p) {
+  if (!(p.radius > 0)) throw std::invalid_argument("builtin DEM: particle radius must be > 0");
+  if (p.material < 0 || p.material >= static_cast<int>(table_.materials.size()))
+    throw std::invalid_argument("builtin DEM: particle material index out of range");
+  const double rho = table_.materials[p.material].density_kg_m3;
+  const double m = rho * 4.0 / 3.0 * kPi * p.radius * p.radius * p.radius;
+  for (int c = 0; c < 3; ++c) {
+    x_.push_back(p.x[c]);
+    v_.push_back(p.v[c]);
+    w_.push_back(p.w[c]);
+    f_.push_back(0);
+    t_.push_back(0);
+    x_build_.push_back(p.x[c]);
+  }
+  radius_.push_back(p.radius);
+  mass_.push_back(m);
+  inv_mass_.push_back(1.0 / m);
+  inv_inertia_.push_back(1.0 / (0.4 * m * p.radius * p.radius));
+  material_.push_back(p.material);
+  layer_.push_back(p.layer);
+  lists_valid_ = false;
+  return static_cast<int>(radius_.size() - 1);
+}
+
+void DemSimulation::setParticleMaterial(int i, int material, int layer) {
+  const double r = radius_[i];
+  const double m = table_.materials.at(material).density_kg_m3 * 4.0 / 3.0 * kPi * r * r * r;
+  material_[i] = material;
+  layer_[i] = layer;
+  mass_[i] = m;
+  inv_mass_[i] = 1.0 / m;
+  inv_inertia_[i] = 1.0 / (0.4 * m * r * r);
+  lists_valid_ = false;  // pair stiffness depends on the material
+}
+
+void DemSimulation::keepParticles(const std::vector<char>& keep) {
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < particleCount(); ++i) {
+    if (!keep[i]) continue;
+    for (int c = 0; c < 3; ++c) {
+      x_[3 * k + c] = x_[3 * i + c];
+      v_[3 * k + c] = v_[3 * i + c];
+      w_[3 * k + c] = w_[3 * i + c];
+      x_build_[3 * k + c] = x_build_[3 * i + c];
+    }
+    radius_[k] = radius_[i];
+    mass_[k] = mass_[i];
+    inv_mass_[k] = inv_mass_[i];
+    inv_inertia_[k] = inv_inertia_[i];
+    material_[k] = material_[i];
+    layer_[k] = layer_[i];
+    ++k;
+  }
+  for (auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_}) a->resize(3 * k);
+  for (auto* a : {&radius_, &mass_, &inv_mass_, &inv_inertia_}) a->resize(k);
+  material_.resize(k);
+  layer_.resize(k);
+  nb_start_.clear();
+  nb_j_.clear();
+  nb_stiff_.clear();
+  nb_hist_.clear();
+  nb_touch_.clear();
+  wall_contacts_.clear();
+  wall_start_.clear();
+  lists_valid_ = false;
+}
+
+int DemSimulation::addPlane(const PlaneWall& wall) {
+  if (!wall_contacts_.empty()) throw std::logic_error("builtin DEM: walls must be added before contacts exist");
+  PlaneWall p = wall;
+  const double len = std::sqrt(p.normal[0] * p.normal[0] + p.normal[1] * p.normal[1] + p.normal[2] * p.normal[2]);
+  if (!(len > 0)) throw std::invalid_argument("builtin DEM: plane normal is zero");
+  for (double& c : p.normal) c /= len;
+  planes_.push_back(p);
+  plane_force_.push_back({0, 0, 0});
+  return static_cast<int>(planes_.size() - 1);
+}
+
+int DemSimulation::addMesh(TriangleMesh mesh) {
+  if (mesh.nodes.size() != mesh.rest_nodes.size()) mesh.nodes = mesh.rest_nodes;
+  mesh.deformation_velocity.assign(mesh.nodes.size(), Vec3{0, 0, 0});
+  for (const auto& t : mesh.triangles)
+    for (auto id : t)
+      if (id < 0 || static_cast<std::size_t>(id) >= mesh.nodes.size())
+        throw std::invalid_argument("builtin DEM: mesh '" + mesh.name + "' has a triangle with node id " + std::to_string(id) +
+                                    " outside 0.." + std::to_string(mesh.nodes.size() - 1));
+  meshes_.push_back(std::move(mesh));
+  mesh_bin_nodes_.emplace_back();
+  mesh_build_nodes_.emplace_back();
+  mesh_force_.emplace_back(meshes_.back().nodes.size() * 3, 0.0);
+  mesh_impulse_.emplace_back(meshes_.back().nodes.size() * 3, 0.0);
+  updateMeshBinNodes();
+  lists_valid_ = false;
+  return static_cast<int>(meshes_.size() - 1);
+}
+
+void DemSimulation::setMeshMotion(int m, const Vec3& origin, const Vec3& velocity, double t0) {
+  auto& mesh = meshes_.at(m);
+  mesh.origin = origin;
+  mesh.velocity = velocity;
+  mesh.t0 = t0;
+  updateMeshBinNodes();
+}
+
+void DemSimulation::setNodePositions(int m, const std::vector<Vec3>& local, double interval_s) {
+  auto& mesh = meshes_.at(m);
+  if (local.size() != mesh.nodes.size())
+    throw std::invalid_argument("builtin DEM: mesh '" + mesh.name + "' has " + std::to_string(mesh.nodes.size()) +
+                                " nodes, got " + std::to_string(local.size()) + " positions");
+  for (std::size_t k = 0; k < local.size(); ++k) {
+    for (int c = 0; c < 3; ++c) {
+      if (!std::isfinite(local[k][c]))
+        throw std::invalid_argument("builtin DEM: mesh '" + mesh.name + "' node " + std::to_string(k) + " position is not finite");
+      mesh.deformation_velocity[k][c] = interval_s > 0 ? (local[k][c] - mesh.nodes[k][c]) / interval_s : 0.0;
+    }
+  }
+  mesh.nodes = local;
+  updateMeshBinNodes();
+}
+
+void DemSimulation::resetNodeImpulse() {
+  for (auto& imp : mesh_impulse_) std::fill(imp.begin(), imp.end(), 0.0);
+}
+
+void DemSimulation::updateMeshBinNodes() {
+  for (std::size_t m = 0; m < meshes_.size(); ++m) {
+    const auto off = meshes_[m].offset(time_);
+    auto& bin = mesh_bin_nodes_[m];
+    bin.resize(meshes_[m].nodes.size());
+    for (std::size_t k = 0; k < bin.size(); ++k)
+      for (int c = 0; c < 3; ++c) bin[k][c] = meshes_[m].nodes[k][c] + off[c];
+  }
+}
+
+// ---------------------------------------------------------------- time step
+
+ContactStiffness DemSimulation::wallStiffness(int i, int wall_material) const {
+  return contactStiffness(model_, table_.law(material_[i], wall_material), radius_[i], mass_[i]);
+}
+
+double DemSimulation::criticalTimeStep(study::TimeStepCriterion criterion) const {
+  if (particleCount() == 0) throw std::logic_error("builtin DEM: no particles to derive a time step from");
+  const double rmin = *std::min_element(radius_.begin(), radius_.end());
+  if (criterion == study::TimeStepCriterion::Rayleigh) {
+    // Rayleigh step: dt_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) (DESIGN.md section 11).
+    double dt = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < particleCount(); ++i) {
+      const auto& m = table_.materials[material_[i]];
+      const double g = m.youngs_Pa / (2 * (1 + m.poisson));
+      dt = std::min(dt, kPi * rmin * std::sqrt(m.density_kg_m3 / g) / (0.1631 * m.poisson + 0.8766));
+    }
+    return dt;
+  }
+  return kPi / 2.0 * stabilityLimit();  // pi sqrt(m*/k_max): contact half period of the stiffest spring
+}
+
+double DemSimulation::stabilityLimit() const {
+  // Smallest sqrt(m*/k_max) over particle-particle (smallest particle of each material pair) and
+  // particle-wall contacts (every wall material in the table).
+  const std::size_t nm = table_.materials.size();
+  std::vector<double> rmin(nm, std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < particleCount(); ++i) rmin[material_[i]] = std::min(rmin[material_[i]], radius_[i]);
+  double limit = std::numeric_limits<double>::infinity();
+  const auto mass = [&](std::size_t m, double r) { return table_.materials[m].density_kg_m3 * 4.0 / 3.0 * kPi * r * r * r; };
+  for (std::size_t a = 0; a < nm; ++a) {
+    if (!std::isfinite(rmin[a])) continue;
+    const double ma = mass(a, rmin[a]);
+    for (std::size_t b = 0; b < nm; ++b) {
+      const PairLaw& law = table_.law(static_cast<int>(a), static_cast<int>(b));
+      // wall contact (b as wall material)
+      const auto sw = contactStiffness(model_, law, rmin[a], ma);
+      limit = std::min(limit, 2.0 * std::sqrt(ma / stiffestSpring(model_, law, sw)));
+      if (!std::isfinite(rmin[b])) continue;
+      const double mb = mass(b, rmin[b]);
+      const double meff = ma * mb / (ma + mb), reff = rmin[a] * rmin[b] / (rmin[a] + rmin[b]);
+      const auto sp = contactStiffness(model_, law, reff, meff);
+      limit = std::min(limit, 2.0 * std::sqrt(meff / stiffestSpring(model_, law, sp)));
+    }
+  }
+  return limit;
+}
+
+void DemSimulation::setTimeStep(double dt) {
+  if (!(dt > 0)) throw std::invalid_argument("builtin DEM: time step must be > 0");
+  if (particleCount() > 0) {
+    const double limit = stabilityLimit();
+    if (dt > limit)
+      throw std::invalid_argument("builtin DEM: time step " + std::to_string(dt) + " s exceeds the stability limit " +
+                                  std::to_string(limit) + " s of the stiffest contact spring (2 sqrt(m*/k_max))");
+  }
+  dt_ = dt;
+}
+
+// ---------------------------------------------------------------- lists
+
+struct DemSimulation::CellGrid {
+  Vec3 lo;
+  double size = 0;
+  int n[3] = {1, 1, 1};
+  std::vector<std::int32_t> start, items;  // counting-sorted particle ids per cell
+  int cellOf(double c, int axis) const {
+    const int k = static_cast<int>(std::floor((c - lo[axis]) / size));
+    return std::clamp(k, 0, n[axis] - 1);
+  }
+  std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; }
+};
+
+bool DemSimulation::listsStale() const {
+  if (!lists_valid_) return true;
+  const double lim2 = 0.25 * skin_ * skin_;
+  const std::size_t n = particleCount();
+  int stale = 0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : stale)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double d[3] = {x_[3 * i] - x_build_[3 * i], x_[3 * i + 1] - x_build_[3 * i + 1], x_[3 * i + 2] - x_build_[3 * i + 2]};
+    if (norm2(d) > lim2) stale |= 1;
+  }
+  if (stale) return true;
+  for (std::size_t m = 0; m < meshes_.size(); ++m)
+    for (std::size_t k = 0; k < mesh_bin_nodes_[m].size(); ++k) {
+      const double d[3] = {mesh_bin_nodes_[m][k][0] - mesh_build_nodes_[m][k][0],
+                           mesh_bin_nodes_[m][k][1] - mesh_build_nodes_[m][k][1],
+                           mesh_bin_nodes_[m][k][2] - mesh_build_nodes_[m][k][2]};
+      if (norm2(d) > lim2) return true;
+    }
+  return false;
+}
+
+void DemSimulation::rebuildLists() {
+  const std::size_t n = particleCount();
+  const double rmin = n ? *std::min_element(radius_.begin(), radius_.end()) : 0.0;
+  const double rmax = n ? *std::max_element(radius_.begin(), radius_.end()) : 0.0;
+  if (skin_ == 0) skin_ = 0.2 * rmin;  // fixed at the first build (part of the saved state)
+  CellGrid g;
+  g.lo = domain_.lo;
+  g.size = std::max(2 * rmax + skin_, 1e-6);
+  for (int c = 0; c < 3; ++c)
+    g.n[c] = std::clamp(static_cast<int>((domain_.hi[c] - domain_.lo[c]) / g.size), 1, 4096);
+  const std::size_t cells = static_cast<std::size_t>(g.n[0]) * g.n[1] * g.n[2];
+  std::vector<std::int32_t> cell_of(n);
+  g.start.assign(cells + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    cell_of[i] = static_cast<std::int32_t>(
+        g.index(g.cellOf(x_[3 * i], 0), g.cellOf(x_[3 * i + 1], 1), g.cellOf(x_[3 * i + 2], 2)));
+    ++g.start[cell_of[i] + 1];
+  }
+  for (std::size_t c = 0; c < cells; ++c) g.start[c + 1] += g.start[c];
+  g.items.resize(n);
+  {
+    std::vector<std::int32_t> fill(g.start.begin(), g.start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) g.items[fill[cell_of[i]]++] = static_cast<std::int32_t>(i);
+  }
+  buildNeighbourList(g);
+  buildWallCandidates(g);
+  x_build_ = x_;
+  mesh_build_nodes_ = mesh_bin_nodes_;
+  lists_valid_ = true;
+}
+
+void DemSimulation::buildNeighbourList(const CellGrid& g) {
+  const std::size_t n = particleCount();
+  const int T = threads_;
+  std::vector<std::vector<std::int32_t>> rows_j(T);
+  std::vector<std::int32_t> row_len(n, 0);
+#pragma omp parallel num_threads(T)
+  {
+    const int tid = omp_get_thread_num();
+    const std::size_t lo = n * tid / T, hi = n * (tid + 1) / T;
+    auto& out = rows_j[tid];
+    std::vector<std::int32_t> row;
+    for (std::size_t i = lo; i < hi; ++i) {
+      row.clear();
+      const int ci = g.cellOf(x_[3 * i], 0), cj = g.cellOf(x_[3 * i + 1], 1), ck = g.cellOf(x_[3 * i + 2], 2);
+      for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, g.n[2] - 1); ++k)
+        for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, g.n[1] - 1); ++j)
+          for (int ii = std::max(ci - 1, 0); ii <= std::min(ci + 1, g.n[0] - 1); ++ii) {
+            const std::size_t c = g.index(ii, j, k);
+            for (std::int32_t s = g.start[c]; s < g.start[c + 1]; ++s) {
+              const std::int32_t jj = g.items[s];
+              if (static_cast<std::size_t>(jj) <= i) continue;
+              const double d[3] = {x_[3 * i] - x_[3 * jj], x_[3 * i + 1] - x_[3 * jj + 1], x_[3 * i + 2] - x_[3 * jj + 2]};
+              const double cut = radius_[i] + radius_[jj] + skin_;
+              if (norm2(d) < cut * cut) row.push_back(jj);
+            }
+          }
+      std::sort(row.begin(), row.end());
+      row_len[i] = static_cast<std::int32_t>(row.size());
+      out.insert(out.end(), row.begin(), row.end());
+    }
+  }
+  std::vector<std::int32_t> start(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) start[i + 1] = start[i] + row_len[i];
+  std::vector<std::int32_t> nbj;
+  nbj.reserve(start[n]);
+  for (const auto& r : rows_j) nbj.insert(nbj.end(), r.begin(), r.end());
+
+  // Stiffness per slot and history carried over from the old list (rows sorted by j).
+  const int H = layout_.size;
+  std::vector<ContactStiffness> stiff(nbj.size());
+  std::vector<double> hist(nbj.size() * H, 0.0);
+  std::vector<std::uint8_t> touch(nbj.size(), 0);
+  const bool carry = nb_start_.size() == n + 1;
+#pragma omp parallel for num_threads(T) schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::int32_t o = carry ? nb_start_[i] : 0;
+    const std::int32_t oend = carry ? nb_start_[i + 1] : 0;
+    for (std::int32_t s = start[i]; s < start[i + 1]; ++s) {
+      const std::int32_t j = nbj[s];
+      const double ri = radius_[i], rj = radius_[j];
+      const double mi = mass_[i], mj = mass_[j];
+      stiff[s] = contactStiffness(model_, table_.law(material_[i], material_[j]), ri * rj / (ri + rj), mi * mj / (mi + mj));
+      while (o < oend && nb_j_[o] < j) ++o;
+      if (o < oend && nb_j_[o] == j) {
+        touch[s] = nb_touch_[o];
+        for (int h = 0; h < H; ++h) hist[static_cast<std::size_t>(s) * H + h] = nb_hist_[static_cast<std::size_t>(o) * H + h];
+      }
+    }
+  }
+  nb_start_ = std::move(start);
+  nb_j_ = std::move(nbj);
+  nb_stiff_ = std::move(stiff);
+  nb_hist_ = std::move(hist);
+  nb_touch_ = std::move(touch);
+}
+
+void DemSimulation::buildWallCandidates(const CellGrid& g) {
+  const std::size_t n = particleCount();
+  struct Cand {
+    std::int32_t particle, mesh, tri;
+  };
+  std::vector<Cand> cands;
+  for (std::size_t m = 0; m < meshes_.size(); ++m) {
+    const auto& nodes = mesh_bin_nodes_[m];
+    const auto& tris = meshes_[m].triangles;
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      Vec3 lo, hi;
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min({nodes[tris[t][0]][c], nodes[tris[t][1]][c], nodes[tris[t][2]][c]});
+        hi[c] = std::max({nodes[tris[t][0]][c], nodes[tris[t][1]][c], nodes[tris[t][2]][c]});
+      }
+      const double reach = g.size;  // >= 2 rmax + skin
+      int c0[3], c1[3];
+      bool outside = false;
+      for (int c = 0; c < 3; ++c) {
+        if (hi[c] + reach < domain_.lo[c] || lo[c] - reach > domain_.hi[c]) outside = true;
+        c0[c] = g.cellOf(lo[c] - reach, c);
+        c1[c] = g.cellOf(hi[c] + reach, c);
+      }
+      if (outside) continue;
+      for (int k = c0[2]; k <= c1[2]; ++k)
+        for (int j = c0[1]; j <= c1[1]; ++j)
+          for (int i = c0[0]; i <= c1[0]; ++i) {
+            const std::size_t c = g.index(i, j, k);
+            for (std::int32_t s = g.start[c]; s < g.start[c + 1]; ++s) {
+              const std::int32_t p = g.items[s];
+              double d2 = 0;
+              for (int a = 0; a < 3; ++a) {
+                const double xa = x_[3 * p + a];
+                const double e = xa < lo[a] ? lo[a] - xa : (xa > hi[a] ? xa - hi[a] : 0.0);
+                d2 += e * e;
+              }
+              const double cut = radius_[p] + skin_;
+              if (d2 < cut * cut) cands.push_back({p, static_cast<std::int32_t>(m), static_cast<std::int32_t>(t)});
+            }
+          }
+    }
+  }
+  std::sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) {
+    return std::tie(a.particle, a.mesh, a.tri) < std::tie(b.particle, b.mesh, b.tri);
+  });
+  wc_start_.assign(n + 1, 0);
+  wc_mesh_.resize(cands.size());
+  wc_tri_.resize(cands.size());
+  for (std::size_t c = 0; c < cands.size(); ++c) {
+    ++wc_start_[cands[c].particle + 1];
+    wc_mesh_[c] = cands[c].mesh;
+    wc_tri_[c] = cands[c].tri;
+  }
+  for (std::size_t i = 0; i < n; ++i) wc_start_[i + 1] += wc_start_[i];
+}
+
+// ---------------------------------------------------------------- forces
+
+template <study::NormalModel N, study::RollingModel R>
+void DemSimulation::pairForces() {
+  const std::size_t n = particleCount();
+  const int T = threads_;
+  const int H = layout_.size;
+  const double dt = dt_;
+  std::vector<double> thread_max(T, 0.0);
+  std::vector<std::int64_t> thread_bad(T, -1);
+#pragma omp parallel num_threads(T)
+  {
+    const int tid = omp_get_thread_num();
+    double* F = f_.data();
+    double* Tq = t_.data();
+    if (T > 1) {
+      thread_f_[tid].assign(3 * n, 0.0);
+      thread_t_[tid].assign(3 * n, 0.0);
+      F = thread_f_[tid].data();
+      Tq = thread_t_[tid].data();
+    }
+    double local_max = 0;
+    std::int64_t bad = -1;
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const double xi = x_[3 * i], yi = x_[3 * i + 1], zi = x_[3 * i + 2];
+      const double ri = radius_[i];
+      const int mi = material_[i];
+      for (std::int32_t s = nb_start_[i]; s < nb_start_[i + 1]; ++s) {
+        const std::size_t j = static_cast<std::size_t>(nb_j_[s]);
+        const double d[3] = {xi - x_[3 * j], yi - x_[3 * j + 1], zi - x_[3 * j + 2]};
+        const double rj = radius_[j];
+        const double rs = ri + rj;
+        const double r2 = norm2(d);
+        double* hist = nb_hist_.data() + static_cast<std::size_t>(s) * H;
+        if (r2 >= rs * rs) {
+          if (nb_touch_[s]) {
+            nb_touch_[s] = 0;
+            for (int h = 0; h < H; ++h) hist[h] = 0;
+          }
+          continue;
+        }
+        nb_touch_[s] = 1;
+        ContactKinematics k;
+        const double r = std::sqrt(r2);
+        const double rinv = 1.0 / r;
+        for (int c = 0; c < 3; ++c) k.n[c] = d[c] * rinv;
+        k.delta = rs - r;
+        if (k.delta > local_max) local_max = k.delta;
+        if (k.delta > overlapLimitFraction() * std::min(ri, rj) && bad < 0) bad = static_cast<std::int64_t>(i);
+        k.r = r;
+        k.ri = ri;
+        k.rj = rj;
+        k.reff = ri * rj / rs;
+        k.di = ri - 0.5 * k.delta;
+        k.dj = rj - 0.5 * k.delta;
+        double vr[3], wr[3];
+        for (int c = 0; c < 3; ++c) {
+          vr[c] = v_[3 * i + c] - v_[3 * j + c];
+          k.wi[c] = w_[3 * i + c];
+          k.wj[c] = w_[3 * j + c];
+          k.wrel[c] = k.wi[c] - k.wj[c];
+          wr[c] = k.di * k.wi[c] + k.dj * k.wj[c];
+        }
+        k.vn = detail::dot3(vr, k.n);
+        double wxn[3];
+        detail::cross3(wr, k.n, wxn);
+        for (int c = 0; c < 3; ++c) k.vt[c] = vr[c] - k.vn * k.n[c] - wxn[c];
+        const ContactResult res =
+            contactForce<N, R>(model_, layout_, table_.law(mi, material_[j]), nb_stiff_[s], k, dt, hist, false);
+        for (int c = 0; c < 3; ++c) {
+          F[3 * i + c] += res.force[c];
+          F[3 * j + c] -= res.force[c];
+          Tq[3 * i + c] += res.torque_i[c];
+          Tq[3 * j + c] += res.torque_j[c];
+        }
+      }
+    }
+    thread_max[tid] = local_max;
+    thread_bad[tid] = bad;
+  }
+  if (T > 1) {
+#pragma omp parallel for num_threads(T) schedule(static)
+    for (std::size_t q = 0; q < 3 * n; ++q) {
+      double fs = f_[q], ts = t_[q];
+      for (int t = 0; t < T; ++t) {
+        fs += thread_f_[t][q];
+        ts += thread_t_[t][q];
+      }
+      f_[q] = fs;
+      t_[q] = ts;
+    }
+  }
+  max_overlap_ = *std::max_element(thread_max.begin(), thread_max.end());
+  for (int t = 0; t < T; ++t)
+    if (thread_bad[t] >= 0) {
+      const std::size_t i = static_cast<std::size_t>(thread_bad[t]);
+      std::ostringstream msg;
+      msg << "overlap with a neighbour exceeds " << overlapLimitFraction() << " of the smaller radius (largest overlap "
+          << max_overlap_ * 1e3 << " mm); the time step may be too large for the contact stiffness";
+      fail(i, msg.str());
+    }
+}
+
+template <study::NormalModel N, study::RollingModel R>
+void DemSimulation::wallForces() {
+  const std::size_t n = particleCount();
+  const int T = threads_;
+  const int P = static_cast<int>(planes_.size());
+  const double dt = dt_;
+  const int H = layout_.size;
+  std::vector<std::vector<WallContact>> produced(T);
+  std::vector<double> thread_max(T, 0.0);
+  std::vector<std::int64_t> thread_bad(T, -1);
+  const bool have_old = wall_start_.size() == n + 1;
+
+  struct Touch {
+    std::int32_t wall;
+    std::int64_t key;
+    FeatureKind kind;
+    Vec3 q, normal;
+    double dist;
+    std::int32_t nodes[3];
+    double weights[3];
+  };
+
+#pragma omp parallel num_threads(T)
+  {
+    const int tid = omp_get_thread_num();
+    auto& out = produced[tid];
+    double local_max = 0;
+    std::int64_t bad = -1;
+    Touch touch[kMaxWallCandidates];
+    bool accepted[kMaxWallCandidates];
+    int matched_old[kMaxWallCandidates];
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 xi{x_[3 * i], x_[3 * i + 1], x_[3 * i + 2]};
+      const double ri = radius_[i];
+      int nt = 0;
+      for (int p = 0; p < P; ++p) {
+        const auto& pl = planes_[p];
+        const double dist = (xi[0] - pl.point[0]) * pl.normal[0] + (xi[1] - pl.point[1]) * pl.normal[1] +
+                            (xi[2] - pl.point[2]) * pl.normal[2];
+        if (dist >= ri || nt == kMaxWallCandidates) continue;
+        Touch& t = touch[nt++];
+        t = Touch{p, 0, FeatureKind::Face, {xi[0] - dist * pl.normal[0], xi[1] - dist * pl.normal[1], xi[2] - dist * pl.normal[2]},
+                  pl.normal, dist, {-1, -1, -1}, {0, 0, 0}};
+      }
+      for (std::int32_t c = wc_start_[i]; c < wc_start_[i + 1] && nt < kMaxWallCandidates; ++c) {
+        const int m = wc_mesh_[c];
+        const auto& tri = meshes_[m].triangles[wc_tri_[c]];
+        const auto& nodes = mesh_bin_nodes_[m];
+        const ClosestFeature f = closestFeature(xi, nodes[tri[0]], nodes[tri[1]], nodes[tri[2]], tri, wc_tri_[c]);
+        const double d[3] = {xi[0] - f.point[0], xi[1] - f.point[1], xi[2] - f.point[2]};
+        const double d2 = norm2(d);
+        if (d2 >= ri * ri) continue;
+        const double dist = std::sqrt(d2);
+        Vec3 normal;
+        if (dist > 0) {
+          for (int a = 0; a < 3; ++a) normal[a] = d[a] / dist;
+        } else {  // centre exactly on the surface: use the face normal
+          const auto& A = nodes[tri[0]];
+          const auto& B = nodes[tri[1]];
+          const auto& C = nodes[tri[2]];
+          const double u[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]}, v[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
+          double nn[3];
+          detail::cross3(u, v, nn);
+          const double l = std::sqrt(norm2(nn));
+          for (int a = 0; a < 3; ++a) normal[a] = nn[a] / l;
+        }
+        Touch& t = touch[nt++];
+        t = Touch{P + m, f.key, f.kind, f.point, normal, dist, {tri[0], tri[1], tri[2]}, {f.weights[0], f.weights[1], f.weights[2]}};
+      }
+      if (nt == 0) continue;
+      // De-duplicate (DESIGN.md section 2): faces first; an edge or vertex seen from several
+      // triangles is one contact; an edge/vertex belonging to an accepted face (or a vertex of an
+      // accepted edge) of the same mesh is the same contact seen from a neighbour triangle.
+      std::sort(touch, touch + nt, [](const Touch& a, const Touch& b) {
+        return std::tie(a.wall, a.kind, a.key) < std::tie(b.wall, b.kind, b.key);
+      });
+      for (int a = 0; a < nt; ++a) {
+        accepted[a] = true;
+        if (touch[a].wall < P) continue;
+        for (int b = 0; b < a && accepted[a]; ++b) {
+          if (!accepted[b] || touch[b].wall != touch[a].wall) continue;
+          if (touch[b].key == touch[a].key) { accepted[a] = false; break; }
+          if (touch[a].kind == FeatureKind::Face || touch[b].kind == FeatureKind::Vertex) continue;
+          // nodes of feature a (those with non-zero weight) all among b's triangle nodes (face) or edge nodes
+          bool inside = true;
+          for (int q = 0; q < 3; ++q) {
+            if (touch[a].weights[q] == 0) continue;
+            const std::int32_t node = touch[a].nodes[q];
+            bool found = false;
+            for (int r = 0; r < 3; ++r)
+              if (touch[b].nodes[r] == node && (touch[b].kind == FeatureKind::Face || touch[b].weights[r] != 0)) found = true;
+            inside = inside && found;
+          }
+          if (inside) accepted[a] = false;
+        }
+      }
+      // Contact history: same (wall, feature) as before, or handed on from the one vanished contact
+      // of the same wall when the particle slid onto a neighbouring feature.
+      const std::int32_t o0 = have_old ? wall_start_[i] : 0, o1 = have_old ? wall_start_[i + 1] : 0;
+      for (int a = 0; a < nt; ++a) {
+        matched_old[a] = -1;
+        if (!accepted[a]) continue;
+        for (std::int32_t o = o0; o < o1; ++o)
+          if (wall_contacts_[o].wall == touch[a].wall && wall_contacts_[o].key == touch[a].key) matched_old[a] = o;
+      }
+      for (int a = 0; a < nt; ++a) {
+        if (!accepted[a] || matched_old[a] >= 0) continue;
+        int vanished = -1, count = 0;
+        for (std::int32_t o = o0; o < o1; ++o) {
+          if (wall_contacts_[o].wall != touch[a].wall) continue;
+          bool still = false;
+          for (int b = 0; b < nt; ++b) still = still || (accepted[b] && matched_old[b] == o);
+          if (!still) { vanished = o; ++count; }
+        }
+        int fresh = 0;
+        for (int b = 0; b < nt; ++b) fresh += accepted[b] && matched_old[b] < 0 && touch[b].wall == touch[a].wall;
+        if (count == 1 && fresh == 1) matched_old[a] = vanished;
+      }
+      for (int a = 0; a < nt; ++a) {
+        if (!accepted[a]) continue;
+        const Touch& t = touch[a];
+        WallContact wc{};
+        wc.particle = static_cast<std::int32_t>(i);
+        wc.wall = t.wall;
+        wc.key = t.key;
+        if (matched_old[a] >= 0) std::memcpy(wc.hist, wall_contacts_[matched_old[a]].hist, sizeof(wc.hist));
+        for (int q = 0; q < 3; ++q) {
+          wc.nodes[q] = t.nodes[q];
+          wc.weights[q] = t.weights[q];
+        }
+        const bool is_mesh = t.wall >= P;
+        const int wall_material = is_mesh ? meshes_[t.wall - P].material : planes_[t.wall].material;
+        ContactKinematics k;
+        for (int c = 0; c < 3; ++c) k.n[c] = t.normal[c];
+        k.delta = ri - t.dist;
+        if (k.delta > local_max) local_max = k.delta;
+        if (k.delta > overlapLimitFraction() * ri && bad < 0) bad = static_cast<std::int64_t>(i);
+        k.r = t.dist;
+        k.ri = ri;
+        k.rj = 0;
+        k.reff = ri;
+        k.di = t.dist;
+        k.dj = 0;
+        double vwall[3] = {0, 0, 0};
+        if (is_mesh) {
+          const auto& mesh = meshes_[t.wall - P];
+          for (int c = 0; c < 3; ++c) {
+            vwall[c] = mesh.velocity[c];
+            for (int q = 0; q < 3; ++q) vwall[c] += t.weights[q] * mesh.deformation_velocity[t.nodes[q]][c];
+          }
+        }
+        double vr[3], wr[3];
+        for (int c = 0; c < 3; ++c) {
+          vr[c] = v_[3 * i + c] - vwall[c];
+          k.wi[c] = w_[3 * i + c];
+          k.wj[c] = 0;
+          k.wrel[c] = k.wi[c];
+          wr[c] = k.di * k.wi[c];
+        }
+        k.vn = detail::dot3(vr, k.n);
+        double wxn[3];
+        detail::cross3(wr, k.n, wxn);
+        for (int c = 0; c < 3; ++c) k.vt[c] = vr[c] - k.vn * k.n[c] - wxn[c];
+        const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wall_material),
+                                                     wallStiffness(static_cast<int>(i), wall_material), k, dt,
+                                                     H ? wc.hist : nullptr, true);
+        for (int c = 0; c < 3; ++c) {
+          f_[3 * i + c] += res.force[c];
+          t_[3 * i + c] += res.torque_i[c];
+          wc.force[c] = res.force[c];
+        }
+        out.push_back(wc);
+      }
+    }
+    thread_max[tid] = local_max;
+    thread_bad[tid] = bad;
+  }
+  // Gather in particle order (static schedule: thread blocks are ascending).
+  wall_contacts_.clear();
+  for (auto& v : produced) wall_contacts_.insert(wall_contacts_.end(), v.begin(), v.end());
+  wall_start_.assign(n + 1, 0);
+  for (const auto& wc : wall_contacts_) ++wall_start_[wc.particle + 1];
+  for (std::size_t i = 0; i < n; ++i) wall_start_[i + 1] += wall_start_[i];
+  for (auto& mf : mesh_force_) std::fill(mf.begin(), mf.end(), 0.0);
+  for (auto& pf : plane_force_) pf = {0, 0, 0};
+  for (const auto& wc : wall_contacts_) {
+    if (wc.wall < P) {
+      for (int c = 0; c < 3; ++c) plane_force_[wc.wall][c] -= wc.force[c];
+      continue;
+    }
+    auto& mf = mesh_force_[wc.wall - P];
+    auto& mi = mesh_impulse_[wc.wall - P];
+    for (int q = 0; q < 3; ++q) {
+      if (wc.weights[q] == 0) continue;
+      for (int c = 0; c < 3; ++c) {
+        const double f = -wc.force[c] * wc.weights[q];
+        mf[3 * wc.nodes[q] + c] += f;
+        mi[3 * wc.nodes[q] + c] += f * dt;
+      }
+    }
+  }
+  max_overlap_ = std::max(max_overlap_, *std::max_element(thread_max.begin(), thread_max.end()));
+  for (int t = 0; t < T; ++t)
+    if (thread_bad[t] >= 0)
+      fail(static_cast<std::size_t>(thread_bad[t]),
+           "overlap with a wall exceeds " + std::to_string(overlapLimitFraction()) + " of its radius");
+}
+
+void DemSimulation::computeForces() {
+  const std::size_t n = particleCount();
+#pragma omp parallel for num_threads(threads_) schedule(static)
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      f_[3 * i + c] = mass_[i] * gravity_[c];
+      t_[3 * i + c] = 0;
+    }
+  using NM = study::NormalModel;
+  using RM = study::RollingModel;
+  const auto dispatch = [&]<NM N>() {
+    switch (model_.rolling) {
+      case RM::None: pairForces<N, RM::None>(); wallForces<N, RM::None>(); break;
+      case RM::EdemStandard: pairForces<N, RM::EdemStandard>(); wallForces<N, RM::EdemStandard>(); break;
+      case RM::Cdt: pairForces<N, RM::Cdt>(); wallForces<N, RM::Cdt>(); break;
+      case RM::Epsd: pairForces<N, RM::Epsd>(); wallForces<N, RM::Epsd>(); break;
+    }
+  };
+  switch (model_.normal) {
+    case NM::EdemHysteretic: dispatch.template operator()<NM::EdemHysteretic>(); break;
+    case NM::Hooke: dispatch.template operator()<NM::Hooke>(); break;
+    case NM::HookeHysteresis: dispatch.template operator()<NM::HookeHysteresis>(); break;
+  }
+}
+
+// ---------------------------------------------------------------- integration
+
+void DemSimulation::run(long steps) {
+  if (steps <= 0) return;
+  if (!(dt_ > 0)) throw std::logic_error("builtin DEM: run() before setTimeStep()");
+  for (long s = 0; s < steps; ++s) step();
+}
+
+void DemSimulation::step() {
+  const std::size_t n = particleCount();
+  const double half = 0.5 * dt_;
+  if (step_ == 0 || !lists_valid_) {  // forces of the initial state for the first half kick
+    updateMeshBinNodes();
+    rebuildLists();
+    computeForces();
+  }
+  // Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick, drift, forces, half kick.
+#pragma omp parallel for num_threads(threads_) schedule(static)
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
+      w_[3 * i + c] += half * t_[3 * i + c] * inv_inertia_[i];
+      x_[3 * i + c] += dt_ * v_[3 * i + c];
+    }
+  time_ += dt_;
+  ++step_;
+  updateMeshBinNodes();
+  if (listsStale()) rebuildLists();
+  computeForces();
+#pragma omp parallel for num_threads(threads_) schedule(static)
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
+      w_[3 * i + c] += half * t_[3 * i + c] * inv_inertia_[i];
+    }
+  checkHealth();
+}
+
+void DemSimulation::checkHealth() {
+  const std::size_t n = particleCount();
+  std::int64_t bad = std::numeric_limits<std::int64_t>::max();
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(min : bad)
+  for (std::size_t i = 0; i < n; ++i) {
+    bool ok = true;
+    for (int c = 0; c < 3; ++c) {
+      ok = ok && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]) && std::isfinite(w_[3 * i + c]);
+      ok = ok && x_[3 * i + c] >= domain_.lo[c] && x_[3 * i + c] <= domain_.hi[c];
+    }
+    if (!ok) bad = std::min<std::int64_t>(bad, static_cast<std::int64_t>(i));
+  }
+  if (bad == std::numeric_limits<std::int64_t>::max()) return;
+  const std::size_t i = static_cast<std::size_t>(bad);
+  bool finite = true;
+  for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]);
+  fail(i, finite ? "centre left the domain" : "position or velocity is not a number");
+}
+
+void DemSimulation::fail(std::size_t i, const std::string& what) const {
+  std::ostringstream msg;
+  msg << "builtin DEM blew up at step " << step_ << " (t = " << time_ << " s): particle " << i << " at (" << x_[3 * i]
+      << ", " << x_[3 * i + 1] << ", " << x_[3 * i + 2] << ") m, velocity (" << v_[3 * i] << ", " << v_[3 * i + 1] << ", "
+      << v_[3 * i + 2] << ") m/s: " << what;
+  throw BlowUp(msg.str());
+}
+
+// ---------------------------------------------------------------- state
+
+ParticleState DemSimulation::particle(std::size_t i) const {
+  ParticleState p;
+  for (int c = 0; c < 3; ++c) {
+    p.x[c] = x_[3 * i + c];
+    p.v[c] = v_[3 * i + c];
+    p.w[c] = w_[3 * i + c];
+  }
+  p.radius = radius_[i];
+  p.material = material_[i];
+  p.layer = layer_[i];
+  return p;
+}
+
+double DemSimulation::kineticEnergy() const {
+  double e = 0;
+  for (std::size_t i = 0; i < particleCount(); ++i)
+    e += 0.5 * mass_[i] * norm2(&v_[3 * i]) + 0.5 / inv_inertia_[i] * norm2(&w_[3 * i]);
+  return e;
+}
+
+Vec3 DemSimulation::momentum() const {
+  Vec3 p{0, 0, 0};
+  for (std::size_t i = 0; i < particleCount(); ++i)
+    for (int c = 0; c < 3; ++c) p[c] += mass_[i] * v_[3 * i + c];
+  return p;
+}
+
+Vec3 DemSimulation::angularMomentum() const {
+  Vec3 l{0, 0, 0};
+  for (std::size_t i = 0; i < particleCount(); ++i) {
+    double mv[3] = {mass_[i] * v_[3 * i], mass_[i] * v_[3 * i + 1], mass_[i] * v_[3 * i + 2]}, rxp[3];
+    detail::cross3(&x_[3 * i], mv, rxp);
+    for (int c = 0; c < 3; ++c) l[c] += rxp[c] + w_[3 * i + c] / inv_inertia_[i];
+  }
+  return l;
+}
+
+double DemSimulation::maxOverlap() const { return max_overlap_; }
+
+std::size_t DemSimulation::contactCount() const {
+  std::size_t c = wall_contacts_.size();
+  for (auto t : nb_touch_) c += t;
+  return c;
+}
+
+std::size_t DemSimulation::bytesPerParticle() const {
+  const std::size_t n = std::max<std::size_t>(1, particleCount());
+  std::size_t b = 0;
+  for (const auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_, &radius_, &mass_, &inv_mass_, &inv_inertia_}) b += a->capacity() * sizeof(double);
+  b += (material_.capacity() + layer_.capacity() + nb_start_.capacity() + nb_j_.capacity() + wc_start_.capacity() +
+        wc_mesh_.capacity() + wc_tri_.capacity() + wall_start_.capacity()) * sizeof(std::int32_t);
+  b += nb_stiff_.capacity() * sizeof(ContactStiffness) + nb_hist_.capacity() * sizeof(double) + nb_touch_.capacity();
+  b += wall_contacts_.capacity() * sizeof(WallContact);
+  for (const auto& tf : thread_f_) b += tf.capacity() * sizeof(double);
+  for (const auto& tt : thread_t_) b += tt.capacity() * sizeof(double);
+  return b / n;
+}
+
+// ---------------------------------------------------------------- checkpoint
+
+namespace {
+constexpr char kMagic[8] = {'D', 'F', 'D', 'E', 'M', 'S', 'T', '1'};
+
+template <class T>
+void put(std::ostream& out, const T& v) {
+  out.write(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+template <class T>
+void putVec(std::ostream& out, const std::vector<T>& v) {
+  put<std::uint64_t>(out, v.size());
+  out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+}
+template <class T>
+void get(std::istream& in, T& v) {
+  in.read(reinterpret_cast<char*>(&v), sizeof(T));
+  if (!in) throw std::runtime_error("builtin DEM checkpoint: truncated file");
+}
+template <class T>
+void getVec(std::istream& in, std::vector<T>& v) {
+  std::uint64_t n = 0;
+  get(in, n);
+  if (n > (std::uint64_t{1} << 34)) throw std::runtime_error("builtin DEM checkpoint: corrupt array size");
+  v.resize(n);
+  in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+  if (!in) throw std::runtime_error("builtin DEM checkpoint: truncated file");
+}
+}  // namespace
+
+void DemSimulation::saveState(std::ostream& out) const {
+  out.write(kMagic, sizeof(kMagic));
+  put(out, static_cast<std::int32_t>(threads_));
+  put(out, static_cast<std::int32_t>(layout_.size));
+  put(out, static_cast<std::uint64_t>(table_.materials.size()));
+  put(out, gravity_);
+  put(out, dt_);
+  put(out, time_);
+  put(out, step_);
+  put(out, skin_);
+  put(out, static_cast<std::uint8_t>(lists_valid_));
+  put(out, max_overlap_);
+  for (const auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_, &radius_, &mass_, &inv_mass_, &inv_inertia_}) putVec(out, *a);
+  putVec(out, material_);
+  putVec(out, layer_);
+  putVec(out, nb_start_);
+  putVec(out, nb_j_);
+  putVec(out, nb_stiff_);
+  putVec(out, nb_hist_);
+  putVec(out, nb_touch_);
+  putVec(out, planes_);
+  put(out, static_cast<std::uint64_t>(meshes_.size()));
+  for (std::size_t m = 0; m < meshes_.size(); ++m) {
+    const auto& mesh = meshes_[m];
+    putVec(out, std::vector<char>(mesh.name.begin(), mesh.name.end()));
+    putVec(out, mesh.rest_nodes);
+    putVec(out, mesh.nodes);
+    putVec(out, mesh.deformation_velocity);
+    putVec(out, mesh.triangles);
+    put(out, mesh.origin);
+    put(out, mesh.velocity);
+    put(out, mesh.t0);
+    put(out, static_cast<std::int32_t>(mesh.material));
+    putVec(out, mesh_build_nodes_[m]);
+    putVec(out, mesh_force_[m]);
+    putVec(out, mesh_impulse_[m]);
+  }
+  putVec(out, wc_start_);
+  putVec(out, wc_mesh_);
+  putVec(out, wc_tri_);
+  putVec(out, wall_contacts_);
+  putVec(out, wall_start_);
+  putVec(out, plane_force_);
+  if (!out) throw std::runtime_error("builtin DEM checkpoint: write failed");
+}
+
+void DemSimulation::loadState(std::istream& in) {
+  char magic[sizeof(kMagic)];
+  in.read(magic, sizeof(magic));
+  if (!in || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
+    throw std::runtime_error("builtin DEM checkpoint: not a builtin DEM state file (bad magic)");
+  std::int32_t threads = 0, hist = 0;
+  std::uint64_t nmat = 0;
+  get(in, threads);
+  get(in, hist);
+  get(in, nmat);
+  if (threads != threads_)
+    throw std::runtime_error("builtin DEM checkpoint: written with " + std::to_string(threads) + " threads, this run has " +
+                             std::to_string(threads_) + " (bit-identical restart needs the same count)");
+  if (hist != layout_.size || nmat != table_.materials.size())
+    throw std::runtime_error("builtin DEM checkpoint: written for another contact model or material table");
+  std::uint8_t valid = 0;
+  get(in, gravity_);
+  get(in, dt_);
+  get(in, time_);
+  get(in, step_);
+  get(in, skin_);
+  get(in, valid);
+  get(in, max_overlap_);
+  lists_valid_ = valid != 0;
+  for (auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_, &radius_, &mass_, &inv_mass_, &inv_inertia_}) getVec(in, *a);
+  getVec(in, material_);
+  getVec(in, layer_);
+  getVec(in, nb_start_);
+  getVec(in, nb_j_);
+  getVec(in, nb_stiff_);
+  getVec(in, nb_hist_);
+  getVec(in, nb_touch_);
+  getVec(in, planes_);
+  std::uint64_t nmesh = 0;
+  get(in, nmesh);
+  meshes_.assign(nmesh, TriangleMesh{});
+  mesh_build_nodes_.assign(nmesh, {});
+  mesh_force_.assign(nmesh, {});
+  mesh_impulse_.assign(nmesh, {});
+  mesh_bin_nodes_.assign(nmesh, {});
+  for (std::size_t m = 0; m < nmesh; ++m) {
+    auto& mesh = meshes_[m];
+    std::vector<char> name;
+    getVec(in, name);
+    mesh.name.assign(name.begin(), name.end());
+    getVec(in, mesh.rest_nodes);
+    getVec(in, mesh.nodes);
+    getVec(in, mesh.deformation_velocity);
+    getVec(in, mesh.triangles);
+    get(in, mesh.origin);
+    get(in, mesh.velocity);
+    get(in, mesh.t0);
+    std::int32_t mat = 0;
+    get(in, mat);
+    mesh.material = mat;
+    getVec(in, mesh_build_nodes_[m]);
+    getVec(in, mesh_force_[m]);
+    getVec(in, mesh_impulse_[m]);
+  }
+  getVec(in, wc_start_);
+  getVec(in, wc_mesh_);
+  getVec(in, wc_tri_);
+  getVec(in, wall_contacts_);
+  getVec(in, wall_start_);
+  getVec(in, plane_force_);
+  updateMeshBinNodes();
+}
+
+// ---------------------------------------------------------------- VTK
+
+void DemSimulation::writeParticlesVtk(const std::filesystem::path& file) const {
+  std::ofstream out(file);
+  if (!out) throw std::runtime_error(file.string() + ": cannot write particle VTK file");
+  const std::size_t n = particleCount();
+  out << "# vtk DataFile Version 3.0\ndemfem builtin DEM particles t = " << time_ << " s\nASCII\nDATASET POLYDATA\n";
+  out << "POINTS " << n << " double\n";
+  out.precision(9);
+  for (std::size_t i = 0; i < n; ++i) out << x_[3 * i] << ' ' << x_[3 * i + 1] << ' ' << x_[3 * i + 2] << '\n';
+  out << "VERTICES " << n << ' ' << 2 * n << '\n';
+  for (std::size_t i = 0; i < n; ++i) out << "1 " << i << '\n';
+  out << "POINT_DATA " << n << "\nSCALARS radius_m double 1\nLOOKUP_TABLE default\n";
+  for (std::size_t i = 0; i < n; ++i) out << radius_[i] << '\n';
+  out << "SCALARS layer int 1\nLOOKUP_TABLE default\n";
+  for (std::size_t i = 0; i < n; ++i) out << layer_[i] << '\n';
+  out << "VECTORS velocity_m_s double\n";
+  for (std::size_t i = 0; i < n; ++i) out << v_[3 * i] << ' ' << v_[3 * i + 1] << ' ' << v_[3 * i + 2] << '\n';
+  if (!out) throw std::runtime_error(file.string() + ": write failed");
+}
+
+void DemSimulation::writeMeshVtk(int m, const std::filesystem::path& file) const {
+  std::ofstream out(file);
+  if (!out) throw std::runtime_error(file.string() + ": cannot write mesh VTK file");
+  const auto& nodes = mesh_bin_nodes_.at(m);
+  const auto& tris = meshes_[m].triangles;
+  out << "# vtk DataFile Version 3.0\ndemfem builtin DEM mesh " << meshes_[m].name << " t = " << time_
+      << " s\nASCII\nDATASET POLYDATA\nPOINTS " << nodes.size() << " double\n";
+  out.precision(9);
+  for (const auto& p : nodes) out << p[0] << ' ' << p[1] << ' ' << p[2] << '\n';
+  out << "POLYGONS " << tris.size() << ' ' << 4 * tris.size() << '\n';
+  for (const auto& t : tris) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  out << "POINT_DATA " << nodes.size() << "\nVECTORS force_N double\n";
+  const auto& f = mesh_force_[m];
+  for (std::size_t k = 0; k < nodes.size(); ++k) out << f[3 * k] << ' ' << f[3 * k + 1] << ' ' << f[3 * k + 2] << '\n';
+  if (!out) throw std::runtime_error(file.string() + ": write failed");
+}
+
+}  // namespace demfem::builtin

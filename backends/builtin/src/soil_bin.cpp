@@ -1,0 +1,233 @@
+#include "demfem/backends/builtin/soil_bin.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace demfem::builtin {
+
+namespace {
+constexpr char kSoilMagic[8] = {'D', 'F', 'S', 'O', 'I', 'L', '0', '1'};
+constexpr double kSettledPacking = 0.60;     // solid fraction assumed to size each stage's batch
+constexpr double kLatticeGap = 1.10;          // insertion lattice spacing / d_max
+constexpr double kStageTimeCap_s = 3.0;       // simulated settling time cap per stage
+constexpr int kEnergyCheckSteps = 200;        // steps between kinetic-energy checks
+}  // namespace
+
+Domain binDomain(const study::Soil& soil) {
+  const double margin = 2 * soil.diameter_max_m;
+  // Room above the fill: the loose insertion lattice of a stage and the tools (up to 0.3 m).
+  const double top = std::max(3.0 * soil.fill_height_m, soil.fill_height_m + 0.3);
+  return Domain{{-soil.bin_width_m / 2 - margin, -margin, -margin},
+                {soil.bin_width_m / 2 + margin, top, soil.bin_length_m + margin}};
+}
+
+void addBinWalls(DemSimulation& sim, const study::Soil& soil) {
+  const int mat = sim.materials().index(soil.bin_material);
+  const double w = soil.bin_width_m / 2, l = soil.bin_length_m;
+  sim.addPlane({{0, 0, 0}, {0, 1, 0}, mat});
+  sim.addPlane({{-w, 0, 0}, {1, 0, 0}, mat});
+  sim.addPlane({{w, 0, 0}, {-1, 0, 0}, mat});
+  sim.addPlane({{0, 0, 0}, {0, 0, 1}, mat});
+  sim.addPlane({{0, 0, l}, {0, 0, -1}, mat});
+}
+
+double studyTimeStep(const DemSimulation& sim, const study::DemSettings& dem) {
+  if (dem.dt_s) return *dem.dt_s;
+  if (!(dem.dt_fraction > 0 && dem.dt_fraction <= 1))
+    throw std::invalid_argument("builtin DEM: /dem/dt_fraction must be in (0, 1], got " + std::to_string(dem.dt_fraction));
+  return dem.dt_fraction * sim.criticalTimeStep(dem.criterion);
+}
+
+int layerAt(const study::Soil& soil, double y) {
+  const double depth = soil.fill_height_m - y;
+  for (std::size_t l = 0; l < soil.layers.size(); ++l)
+    if (depth < soil.layers[l].bottom_depth_m) return static_cast<int>(l);
+  return static_cast<int>(soil.layers.size()) - 1;
+}
+
+SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report,
+                        const std::function<void(const std::string&)>& progress) {
+  const auto& soil = study.soil;
+  if (soil.layers.empty()) throw std::invalid_argument("builtin DEM: /soil/layers is empty");
+  DemSimulation sim(soil, binDomain(soil), threads);
+  addBinWalls(sim, soil);
+  std::mt19937_64 rng(soil.deposition_seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double rmin = soil.diameter_min_m / 2, rmax = soil.diameter_max_m / 2;
+  // Mean sphere volume for radii uniform in [rmin, rmax]: E[r^3] = (rmax^4 - rmin^4) / (4 (rmax - rmin)).
+  const double mean_r3 = rmax > rmin ? (std::pow(rmax, 4) - std::pow(rmin, 4)) / (4 * (rmax - rmin)) : rmin * rmin * rmin;
+  const double mean_volume = 4.0 / 3.0 * std::numbers::pi * mean_r3;
+  const double w = soil.bin_width_m, l = soil.bin_length_m;
+  const double spacing = kLatticeGap * soil.diameter_max_m;
+  const int nx = std::max(1, static_cast<int>((w - spacing) / spacing) + 1);
+  const int nz = std::max(1, static_cast<int>((l - spacing) / spacing) + 1);
+
+  // Stage tops (heights above the floor) from the bottom layer up: the layer boundaries.
+  std::vector<double> stage_tops;
+  for (auto it = soil.layers.rbegin(); it != soil.layers.rend(); ++it) stage_tops.push_back(soil.fill_height_m - it->top_depth_m);
+  const int deepest = static_cast<int>(soil.layers.size()) - 1;
+  const int deposit_material = sim.materials().index(soil.layers[deepest].material);
+
+  double filled = 0;  // height filled so far
+  bool dt_set = false;
+  for (std::size_t s = 0; s < stage_tops.size(); ++s) {
+    const bool last = s + 1 == stage_tops.size();
+    // Overfill the last stage by 5 % so that the trimmed surface reaches the fill height.
+    const double volume = w * l * (stage_tops[s] - filled) * (last ? 1.05 : 1.0);
+    const auto count = static_cast<std::size_t>(std::ceil(kSettledPacking * volume / mean_volume));
+    double ytop = 0;
+    for (std::size_t i = 0; i < sim.particleCount(); ++i) ytop = std::max(ytop, sim.particle(i).x[1] + sim.particle(i).radius);
+    const double y0 = ytop + spacing / 2 + 0.5 * soil.diameter_max_m;
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t per_level = static_cast<std::size_t>(nx) * nz;
+      const std::size_t level = k / per_level, in_level = k % per_level;
+      const double jitter = 0.5 * (spacing - soil.diameter_max_m);
+      ParticleState p;
+      p.radius = rmin + (rmax - rmin) * unit(rng);
+      p.x = {-w / 2 + spacing / 2 + spacing * static_cast<double>(in_level % nx) + jitter * (2 * unit(rng) - 1),
+             y0 + spacing * static_cast<double>(level) + jitter * (2 * unit(rng) - 1),
+             spacing / 2 + spacing * static_cast<double>(in_level / nx) + jitter * (2 * unit(rng) - 1)};
+      p.material = deposit_material;
+      p.layer = deepest;
+      sim.addParticle(p);
+    }
+    if (!dt_set) {
+      sim.setTimeStep(studyTimeStep(sim, study.dem));
+      dt_set = true;
+    }
+    const double start = sim.time();
+    double energy = sim.kineticEnergy();
+    bool settled = false;
+    // Fall first (energy rises), then settle below the threshold.
+    while (sim.time() - start < kStageTimeCap_s) {
+      sim.run(kEnergyCheckSteps);
+      energy = sim.kineticEnergy();
+      if (energy < soil.settle_kinetic_energy_J && sim.time() - start > 0.05) {
+        settled = true;
+        break;
+      }
+    }
+    report.settled = report.settled && settled;
+    filled = stage_tops[s];
+    if (progress) {
+      std::ostringstream line;
+      line << "stage " << s + 1 << "/" << stage_tops.size() << ": " << sim.particleCount() << " particles, up to "
+           << filled * 1e3 << " mm, kinetic energy " << energy << " J after " << sim.time() - start << " s"
+           << (settled ? "" : " (time cap reached before the energy threshold)");
+      progress(line.str());
+    }
+  }
+  // Trim above the fill height, tag layers by depth, settle again with the layer materials.
+  std::vector<char> keep(sim.particleCount());
+  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = sim.particle(i).x[1] <= soil.fill_height_m;
+  sim.keepParticles(keep);
+  for (std::size_t i = 0; i < sim.particleCount(); ++i) {
+    const int layer = layerAt(soil, sim.particle(i).x[1]);
+    sim.setParticleMaterial(static_cast<int>(i), sim.materials().index(soil.layers[layer].material), layer);
+  }
+  const double start = sim.time();
+  bool settled = false;
+  while (sim.time() - start < kStageTimeCap_s) {
+    sim.run(kEnergyCheckSteps);
+    if (sim.kineticEnergy() < soil.settle_kinetic_energy_J) {
+      settled = true;
+      break;
+    }
+  }
+  report.settled = report.settled && settled;
+
+  SettledSoil out;
+  out.soil_hash = study::soilHash(study);
+  for (std::size_t i = 0; i < sim.particleCount(); ++i) {
+    const auto p = sim.particle(i);
+    out.particles.push_back({p.x, p.radius, p.layer});
+    report.surface_height_m = std::max(report.surface_height_m, p.x[1] + p.radius);
+  }
+  report.particles = sim.particleCount();
+  report.simulated_s = sim.time();
+  report.steps = sim.stepCount();
+  report.time_step_s = sim.timeStep();
+  report.final_kinetic_energy_J = sim.kineticEnergy();
+  return out;
+}
+
+void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil) {
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
+  const auto tmp = file.string() + ".part";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw std::runtime_error(file.string() + ": cannot write settled-soil file");
+    out.write(kSoilMagic, sizeof(kSoilMagic));
+    const std::uint32_t hash_len = static_cast<std::uint32_t>(soil.soil_hash.size());
+    out.write(reinterpret_cast<const char*>(&hash_len), 4);
+    out.write(soil.soil_hash.data(), hash_len);
+    const std::uint64_t n = soil.particles.size();
+    out.write(reinterpret_cast<const char*>(&n), 8);
+    for (const auto& p : soil.particles) {
+      out.write(reinterpret_cast<const char*>(p.x.data()), 24);
+      out.write(reinterpret_cast<const char*>(&p.radius), 8);
+      const std::int32_t layer = p.layer;
+      out.write(reinterpret_cast<const char*>(&layer), 4);
+    }
+    if (!out) throw std::runtime_error(file.string() + ": write failed");
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+SettledSoil readSettledSoil(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error(file.string() + ": cannot open settled-soil file");
+  char magic[8];
+  in.read(magic, 8);
+  if (!in || std::memcmp(magic, kSoilMagic, 8) != 0) throw std::runtime_error(file.string() + ": not a settled-soil file");
+  SettledSoil soil;
+  std::uint32_t hash_len = 0;
+  in.read(reinterpret_cast<char*>(&hash_len), 4);
+  if (!in || hash_len > 4096) throw std::runtime_error(file.string() + ": corrupt settled-soil header");
+  soil.soil_hash.resize(hash_len);
+  in.read(soil.soil_hash.data(), hash_len);
+  std::uint64_t n = 0;
+  in.read(reinterpret_cast<char*>(&n), 8);
+  if (!in || n > 100'000'000) throw std::runtime_error(file.string() + ": corrupt particle count");
+  soil.particles.resize(n);
+  for (auto& p : soil.particles) {
+    std::int32_t layer = 0;
+    in.read(reinterpret_cast<char*>(p.x.data()), 24);
+    in.read(reinterpret_cast<char*>(&p.radius), 8);
+    in.read(reinterpret_cast<char*>(&layer), 4);
+    p.layer = layer;
+  }
+  if (!in) throw std::runtime_error(file.string() + ": truncated settled-soil file (" + std::to_string(n) + " particles expected)");
+  return soil;
+}
+
+std::filesystem::path soilFile(const study::Study& study, const std::filesystem::path& dir) {
+  return dir / ("soil-" + study::soilHash(study) + ".bin");
+}
+
+std::filesystem::path defaultSoilDirectory() {
+  if (const char* env = std::getenv("DEMFEM_SOIL_DIR"); env && *env) return env;
+  return "soil";
+}
+
+void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const SettledSoil& settled) {
+  for (const auto& p : settled.particles) {
+    if (p.layer < 0 || p.layer >= static_cast<int>(soil.layers.size()))
+      throw std::runtime_error("settled soil: layer " + std::to_string(p.layer) + " not in /soil/layers");
+    ParticleState s;
+    s.x = p.x;
+    s.radius = p.radius;
+    s.layer = p.layer;
+    s.material = sim.materials().index(soil.layers[p.layer].material);
+    sim.addParticle(s);
+  }
+}
+
+}  // namespace demfem::builtin
