@@ -1,16 +1,55 @@
-// Factory of the liggghts DEM backend: the coupling API (adapter/coupling_api.hpp) on a study's soil and tools.
+// Factory of the liggghts DEM backend: the coupling API (adapter/coupling_api.hpp) on a study's soil
+// and tools, run in-process on Debian's libliggghts (LIGGGHTS-PUBLIC 3.8), one instance per MPI rank.
+//
+// Contract (besides coupling_api.hpp's)
+// - The study is translated by translateStudy() (input_deck.hpp) and checked before any command
+//   reaches LIGGGHTS: LIGGGHTS stops the process on an input error, so what it would reject is
+//   reported here as adapter::CouplingError instead.
+// - Construction deposits the soil (insert, settle under gravity until the kinetic energy falls below
+//   soil.settle_kinetic_energy_J) with the tools already in place at their start positions
+//   (toolStartOrigin(), velocity zero); time() is 0 after it. With BackendOptions::probes set, the
+//   soil is replaced by fixed probe spheres (no deposition, no time integration of particles).
+// - Node forces: accumulated at every DEM step from the per-contact forces LIGGGHTS stores for the
+//   tool meshes (wall/gran store_force_contact_stress) and split to the contact triangle's keypoints
+//   by the barycentric weights of the contact point; reduced over all MPI ranks.
+// - Node positions: read from the tool's LIGGGHTS mesh (per-triangle node copies, merged per keypoint
+//   and over ranks), minus the rigid motion. setNodePositions() moves every local and ghost copy by
+//   the increment; the next simulate() re-runs LIGGGHTS' set-up so normals and neighbour lists follow.
+// - Checkpoint/restore are not offered (ErrorCode::Unsupported).
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"
 #include "demfem/study/study.hpp"
 
+#include <array>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace demfem::liggghts {
+
+// A sphere held fixed in the bin (bin frame, metres), of a particle material of the study.
+struct ProbeSphere {
+  std::array<double, 3> centre_m{};
+  double radius_m = 0;
+  std::string material;
+};
+
+struct BackendOptions {
+  // Empty: deposit the study's soil. Otherwise: only these fixed spheres (contact-law checks).
+  std::vector<ProbeSphere> probes;
+};
 
 // Builds the DEM simulation of `study` (soil, bin, tools at their start positions) ready for the
 // coupling cycle. Throws adapter::CouplingError on a study this backend cannot run.
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study);
+std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const BackendOptions& options);
+
+// The total force on `geometry` at the last DEM step as LIGGGHTS' stress mesh reports it (fix
+// mesh/surface/stress, N, bin frame = local frame as tools are not rotated): an independent check of
+// nodeForces(Instantaneous) summed over the keypoints. Throws BadRequest if `backend` was not made by
+// this backend's makeBackend(), UnknownGeometry for an unknown name.
+std::array<double, 3> meshTotalForce(adapter::CouplingApi& backend, const std::string& geometry);
 
 // MPI (`mpirun -np N demfem-dem --backend liggghts ...`): every rank runs demfem-dem. The leader
 // (rank 0) serves the protocol and calls the backend built by makeBackend(); every other rank calls
@@ -19,5 +58,6 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study);
 // it is true when not started under mpirun.
 bool isLeaderRank();
 void followLeader(const study::Study& study);
+void followLeader(const study::Study& study, const BackendOptions& options);
 
 }  // namespace demfem::liggghts

@@ -1,0 +1,71 @@
+// Translation of a demfem study into LIGGGHTS-PUBLIC 3.8 input commands (DESIGN.md sections 6 and 11;
+// docs/liggghts-backend.md maps every study input onto the LIGGGHTS one and says where they differ).
+// Pure text: no LIGGGHTS or MPI header is needed here, so the translation is testable on its own.
+//
+// Contract
+// - Units: the deck uses LIGGGHTS `units si` (m, kg, s, N), like the Study.
+// - Bin frame (DESIGN.md section 10): x across the bin, centred (x in [-W/2, W/2]); y up, floor at
+//   y = 0; z along the bin, z in [0, bin length]. The bin walls are primitive planes; the box is
+//   larger than the bin so that the tools stay inside it over their whole stroke.
+// - Atom types: 1..P the particle materials in the order they first appear in soil.layers, then the
+//   bin-wall material, then each tool's material (types are per material, so two tools of one
+//   material share a type). Per-type-pair tables come from soil.interactions (Table 2/4); pairs that
+//   can never touch (wall-wall, wall-tool, tool-tool) get the neutral values of kNeverTouching.
+// - Tools: tool i is the mesh/surface/stress fix `tool<i>`, read from `<stl_dir>/tool<i>.stl` (written
+//   by writeToolStl), translated to its start position (toolStartOrigin) and moved by
+//   `move/mesh ... linear/variable` with the equal-style variables `tool<i>_vx/_vy/_vz` (m/s).
+// - Deposition: each layer is inserted once by insert/pack into its own slab of a stretched stack
+//   (bottom layer lowest), so that after settling under gravity the layers lie in study order.
+// - Errors: translateStudy() throws adapter::CouplingError(Unsupported) naming the study field when
+//   the study uses a model LIGGGHTS-PUBLIC does not have (the EDEM-style laws), or BadRequest when a
+//   value would make LIGGGHTS stop the process (LIGGGHTS input errors call exit()).
+#pragma once
+
+#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/study/study.hpp"
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace demfem::liggghts {
+
+// Commands split in the phases the backend runs them in.
+struct InputDeck {
+  std::vector<std::string> setup;       // box, materials, contact model, walls, tools, integrator
+  std::vector<std::string> deposition;  // particle templates and insertion (run before settling)
+  int atom_type_count = 0;
+  double time_step_s = 0;
+  double insertion_top_m = 0;           // top of the insertion stack (y)
+};
+
+// The DEM step the deck uses: the study's explicit dem.dt_s, else dem.dt_fraction of the critical
+// step of dem.criterion: Rayleigh dt_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) at the smallest
+// particle (DESIGN.md section 11), or StiffestSpring pi sqrt(m*/k_max) with k_max the stiffest spring
+// of LIGGGHTS' hooke law (k2max = kn * coefficientMaxElasticStiffness for hooke/hysteresis).
+double demTimeStep(const study::Study& study);
+
+// LIGGGHTS hooke normal stiffness (LIGGGHTS 3.8 normal_model_hooke: kn = 16/15 sqrt(R*) Y*
+// (15 m* Y* V^2 / (16 sqrt(R*) Y*))^(1/5), V the characteristic velocity), for two spheres or, with
+// radius_j = 0 and mass_j = 0, a sphere against a wall (R* = R_i, m* = m_i).
+double hookeNormalStiffness(double youngs_i_Pa, double poisson_i, double youngs_j_Pa, double poisson_j,
+                            double radius_i_m, double radius_j_m, double mass_i_kg, double mass_j_kg,
+                            double characteristic_velocity_m_s);
+
+// Bin position of tool i's local origin at the start (after deposition): centred across the bin,
+// tip `motion.depth_m` below the settled surface (soil.fill_height_m), front face at motion.start_z_m.
+std::array<double, 3> toolStartOrigin(const study::Study& study, std::size_t tool_index);
+
+// The keypoint surface of tool i (plate tools only; other geometry kinds throw Unsupported).
+adapter::PlateSurface toolSurface(const study::Study& study, std::size_t tool_index);
+
+// Writes `surface` as an ASCII STL, every node translated by `origin` (bin frame, metres).
+void writeToolStl(const adapter::PlateSurface& surface, const std::array<double, 3>& origin,
+                  const std::filesystem::path& file);
+
+// Translates `study` (validated by study::loadStudy) into LIGGGHTS commands; tool STL files are
+// expected in `stl_dir` under the names given above.
+InputDeck translateStudy(const study::Study& study, const std::filesystem::path& stl_dir);
+
+}  // namespace demfem::liggghts

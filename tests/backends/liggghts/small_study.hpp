@@ -1,0 +1,50 @@
+// A small study for the liggghts backend tests: one soil layer, a steel bin, a steel plate tool,
+// LIGGGHTS-compatible contact laws (plain hooke, tangential history, cdt rolling friction).
+#pragma once
+
+#include "demfem/study/study.hpp"
+
+namespace demfem::liggghts::testing {
+
+inline study::Study smallStudy() {
+  study::Study s;
+  s.name = "liggghts-small";
+  s.kind = study::StudyKind::DemOnly;
+  auto& soil = s.soil;
+  soil.bin_length_m = 0.16;
+  soil.bin_width_m = 0.08;
+  soil.fill_height_m = 0.04;
+  soil.diameter_min_m = 0.0095;
+  soil.diameter_max_m = 0.0105;
+  soil.materials = {{"soil", 2600, 5e6, 0.3, 0},
+                    {"bin_steel", 7850, 2e8, 0.3, 0},
+                    {"tool_steel", 7850, 2e8, 0.3, 0}};
+  soil.bin_material = "bin_steel";
+  soil.layers = {{"soil", 0.0, 0.04}};
+  soil.interactions = {{"soil", "soil", 0.5, 0.5, 0.1, 0.0},
+                       {"soil", "bin_steel", 0.5, 0.4, 0.05, 0.0},
+                       {"soil", "tool_steel", 0.5, 0.4, 0.05, 0.0}};
+  soil.contact.normal = study::NormalModel::Hooke;
+  soil.contact.cohesion = study::CohesionModel::None;
+  soil.contact.rolling = study::RollingModel::Cdt;
+  soil.contact.tangential_history = true;
+  soil.contact.characteristic_velocity_m_s = 0.5;
+  soil.settle_kinetic_energy_J = 1e-6;
+  study::Tool tool;
+  tool.name = "tool";
+  tool.dem_material = "tool_steel";
+  tool.geometry.length_m = 0.1;
+  tool.geometry.width_m = 0.04;
+  tool.geometry.thickness_m = 0.003;
+  tool.geometry.keypoint_spacing_m = 0.01;
+  tool.motion.depth_m = 0.02;
+  tool.motion.start_z_m = 0.0;
+  tool.motion.velocity_m_s = 0.1;
+  tool.motion.stroke_m = 0.1;
+  s.tools = {tool};
+  s.dem.backend = "liggghts";
+  s.dem.dt_fraction = 0.2;
+  return s;
+}
+
+}  // namespace demfem::liggghts::testing
