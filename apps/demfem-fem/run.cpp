@@ -1,14 +1,167 @@
+// `demfem-fem run STUDY --connect ENDPOINT`: the coupled cycle of Fig. 3 against a DEM server.
+#include "demfem/adapter/remote_proxy.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/fem/coupled_driver.hpp"
+#include "demfem/protocol/transport.hpp"
+#include "demfem/study/study.hpp"
 
-#include <stdexcept>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <memory>
 
 namespace demfem::cli {
 
-// Placeholder until its issue lands: says clearly which part is missing.
+namespace {
+
+std::atomic<int> g_stop_signal{0};
+
+extern "C" void onStopSignal(int signal) { g_stop_signal = signal; }
+
+struct RunOptions {
+  std::string study_file;
+  std::string endpoint;
+  std::string curve_keys;
+  std::string output_dir;
+  double timeout_s = 0;
+  std::int64_t steps = 0;
+  std::int64_t checkpoint_every = 0;
+  bool resume = false;
+  bool quiet = false;
+};
+
+std::string clock(double seconds) {
+  const long s = std::lround(std::max(0.0, seconds));
+  char text[32];
+  std::snprintf(text, sizeof text, "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
+  return text;
+}
+
+// Progress on stderr: a redrawn bar on a terminal, a plain line every 10 % (or 30 s) otherwise.
+class ProgressReporter {
+ public:
+  ProgressReporter() : tty_(isatty(STDERR_FILENO) == 1) {}
+
+  void operator()(const fem::CoupledProgress& p) {
+    const auto now = std::chrono::steady_clock::now();
+    const double fraction = p.total_steps ? static_cast<double>(p.step) / static_cast<double>(p.total_steps) : 1.0;
+    const bool last = p.step == p.total_steps;
+    char line[200];
+    if (tty_) {
+      if (!last && now - last_ < std::chrono::milliseconds(100)) return;
+      const int width = 30, filled = static_cast<int>(fraction * width);
+      std::snprintf(line, sizeof line, "\r[%s%s] %5.1f %%  t = %.4f / %.4f s  %.0f steps/s  %s left ",
+                    std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                    std::string(static_cast<std::size_t>(width - filled), '.').c_str(), 100 * fraction, p.time_s,
+                    p.end_time_s, p.steps_per_s, clock(p.eta_s).c_str());
+      std::cerr << line << (last ? "\n" : "") << std::flush;
+    } else {
+      const int decile = static_cast<int>(fraction * 10);
+      if (!last && decile == decile_ && now - last_ < std::chrono::seconds(30)) return;
+      decile_ = decile;
+      std::snprintf(line, sizeof line, "progress: step %lld/%lld (%.1f %%), t = %.4f s of %.4f s, %.0f steps/s, %s left",
+                    static_cast<long long>(p.step), static_cast<long long>(p.total_steps), 100 * fraction, p.time_s,
+                    p.end_time_s, p.steps_per_s, clock(p.eta_s).c_str());
+      std::cerr << line << std::endl;
+    }
+    last_ = now;
+  }
+
+ private:
+  bool tty_;
+  int decile_ = -1;
+  std::chrono::steady_clock::time_point last_{};
+};
+
+void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
+  const study::Study study = study::loadStudy(o.study_file);
+  const std::string endpoint = !o.endpoint.empty() ? o.endpoint : study.coupling.endpoint;
+  if (endpoint.empty()) throw InputError("no DEM server to connect to: pass --connect ENDPOINT (the study has no coupling.endpoint)");
+
+  adapter::RemoteOptions remote;
+  remote.endpoint = endpoint;
+  remote.timeout = std::chrono::milliseconds(static_cast<std::int64_t>(1000 * (o.timeout_s > 0 ? o.timeout_s : study.coupling.timeout_s)));
+  if (!o.curve_keys.empty()) remote.security = protocol::loadClientSecurity(o.curve_keys);
+  remote.client_name = "demfem-fem " + study.name;
+
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
+  adapter::RemoteProxy dem(remote);
+
+  fem::CoupledRunOptions options;
+  options.output_dir = !o.output_dir.empty() ? std::filesystem::path(o.output_dir) : study.output.directory;
+  if (o.steps > 0) options.max_steps = o.steps;
+  options.checkpoint_every = o.checkpoint_every;
+  options.resume = o.resume;
+  options.stop_requested = [] { return g_stop_signal != 0; };
+  ProgressReporter progress;
+  if (!o.quiet) options.on_progress = [&progress](const fem::CoupledProgress& p) { progress(p); };
+
+  fem::CoupledRunSummary summary;
+  try {
+    summary = fem::runCoupled(study, dem, options);
+  } catch (const std::exception& e) {
+    try {
+      dem.shutdown();
+    } catch (const std::exception&) {
+      // the DEM side may be what failed; its own error is the one to report
+    }
+    if (const int signal = g_stop_signal) {
+      std::cerr << "demfem-fem: interrupted; outputs in " << options.output_dir.string() << " marked incomplete\n";
+      std::signal(signal, SIG_DFL);
+      std::raise(signal);  // exit by the signal, as a shell expects
+    }
+    throw std::runtime_error(std::string(e.what()) + " (outputs in " + options.output_dir.string() + " marked incomplete)");
+  }
+  dem.shutdown();
+
+  std::printf("coupled run of '%s' against DEM backend '%s' complete (%s tool)\n", study.name.c_str(),
+              summary.backend.c_str(), summary.rigid_tool ? "rigid" : "deformable");
+  std::printf("  FEM steps            %lld (%lld in the drag phase)\n", static_cast<long long>(summary.steps),
+              static_cast<long long>(summary.drag_steps));
+  std::printf("  simulated time       %.6g s\n", summary.simulated_time_s);
+  std::printf("  wall time            %.3g s\n", summary.wall_time_s);
+  std::printf("  mean load-cell force %.6g N (max %.6g N)\n", summary.mean_force_N, summary.max_force_N);
+  std::printf("  final deformation    %.6g mm, tilt %.6g deg\n", summary.final_deformation_mm, summary.final_tilt_deg);
+  std::printf("  outputs              %s\n", options.output_dir.string().c_str());
+  writeJson(json_target, {{"study", study.name},
+                          {"backend", summary.backend},
+                          {"rigid_tool", summary.rigid_tool},
+                          {"complete", true},
+                          {"steps", summary.steps},
+                          {"drag_steps", summary.drag_steps},
+                          {"simulated_time_s", summary.simulated_time_s},
+                          {"wall_time_s", summary.wall_time_s},
+                          {"mean_force_N", summary.mean_force_N},
+                          {"max_force_N", summary.max_force_N},
+                          {"final_deformation_mm", summary.final_deformation_mm},
+                          {"final_tilt_deg", summary.final_tilt_deg},
+                          {"output_dir", options.output_dir.string()}});
+}
+
+}  // namespace
+
 void addFemRunCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("run", "Coupled run against a DEM server [not built yet: coupling issue]");
-  cmd->allow_extras();
-  cmd->callback([] { throw std::runtime_error("'demfem-fem run' is not built yet (coupling issue)"); });
+  auto* cmd = app.add_subcommand("run", "Coupled run (Fig. 3) of a study against a DEM server (demfem-dem)");
+  auto o = std::make_shared<RunOptions>();
+  cmd->add_option("study", o->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--connect", o->endpoint, "DEM server endpoint (tcp://HOST:PORT, ipc://PATH); default: the study's coupling.endpoint");
+  cmd->add_option("--curve-keys", o->curve_keys, "CurveZMQ key directory (server.pub, client.pub, client.secret)")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
+  cmd->add_option("--timeout-s", o->timeout_s, "Seconds to wait for any DEM reply; default: the study's coupling.timeout_s")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (insertion + drag); default: the whole stroke")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--checkpoint-every", o->checkpoint_every, "Write a coupled checkpoint every N FEM steps")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
+  cmd->add_flag("--quiet", o->quiet, "No progress output");
+  std::string& json = addJsonOption(*cmd);
+  cmd->callback([o, &json] { runCoupledCommand(*o, json); });
 }
 
 }  // namespace demfem::cli

@@ -214,7 +214,12 @@ Multipart ClientSocket::request(const Multipart& request) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) break;
     zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
-    zmq::poll(items, 2, left);
+    try {
+      zmq::poll(items, 2, left);
+    } catch (const zmq::error_t& e) {
+      broken_ = true;
+      throw ProtocolError(WireError::Internal, "waiting for " + endpoint_ + " was interrupted (" + e.what() + ")");
+    }
     if (items[1].revents & ZMQ_POLLIN) {
       std::vector<zmq::message_t> event;
       (void)zmq::recv_multipart(monitor_, std::back_inserter(event));

@@ -4,7 +4,8 @@
 // Contract
 // - Timeouts everywhere: ClientSocket::request() throws ProtocolError(Timeout) when no reply arrives
 //   within the timeout (the message says the peer is gone or refused the client); the socket is then
-//   unusable (REQ state) and every later request throws PeerGone. ServerSocket::receive() returns
+//   unusable (REQ state) and every later request throws PeerGone; a signal interrupting the wait
+//   throws ProtocolError(Internal) saying so. ServerSocket::receive() returns
 //   nothing after its timeout, so a server can notice a vanished client.
 // - Loopback by default: a server refuses to bind tcp:// to a non-loopback address unless CurveZMQ
 //   keys are given (then clients must authenticate).
