@@ -18,6 +18,7 @@ namespace demfem::builtin {
 namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr int kMaxWallCandidates = 32;  // touching features per particle before de-duplication
+constexpr double kSameContact = 1e-6;    // contact points closer than this * radius are one contact
 
 double norm2(const double* a) { return a[0] * a[0] + a[1] * a[1] + a[2] * a[2]; }
 }  // namespace
@@ -322,11 +323,20 @@ void DemSimulation::rebuildLists() {
   const double rmin = n ? *std::min_element(radius_.begin(), radius_.end()) : 0.0;
   const double rmax = n ? *std::max_element(radius_.begin(), radius_.end()) : 0.0;
   if (skin_ == 0) skin_ = 0.2 * rmin;  // fixed at the first build (part of the saved state)
+  // Cells of edge >= 2 rmax + skin over the particles' bounding box (within the domain).
   CellGrid g;
-  g.lo = domain_.lo;
   g.size = std::max(2 * rmax + skin_, 1e-6);
-  for (int c = 0; c < 3; ++c)
-    g.n[c] = std::clamp(static_cast<int>((domain_.hi[c] - domain_.lo[c]) / g.size), 1, 4096);
+  Vec3 hi = domain_.lo;
+  g.lo = domain_.hi;
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      g.lo[c] = std::min(g.lo[c], std::max(x_[3 * i + c], domain_.lo[c]));
+      hi[c] = std::max(hi[c], std::min(x_[3 * i + c], domain_.hi[c]));
+    }
+  for (int c = 0; c < 3; ++c) {
+    if (n == 0) g.lo[c] = hi[c] = domain_.lo[c];
+    g.n[c] = std::clamp(static_cast<int>((hi[c] - g.lo[c]) / g.size) + 1, 1, 4096);
+  }
   const std::size_t cells = static_cast<std::size_t>(g.n[0]) * g.n[1] * g.n[2];
   std::vector<std::int32_t> cell_of(n);
   g.start.assign(cells + 1, 0);
@@ -433,7 +443,7 @@ void DemSimulation::buildWallCandidates(const CellGrid& g) {
       int c0[3], c1[3];
       bool outside = false;
       for (int c = 0; c < 3; ++c) {
-        if (hi[c] + reach < domain_.lo[c] || lo[c] - reach > domain_.hi[c]) outside = true;
+        if (hi[c] + reach < g.lo[c] || lo[c] - reach > g.lo[c] + g.size * g.n[c]) outside = true;
         c0[c] = g.cellOf(lo[c] - reach, c);
         c1[c] = g.cellOf(hi[c] + reach, c);
       }
@@ -656,7 +666,11 @@ void DemSimulation::wallForces() {
         if (touch[a].wall < P) continue;
         for (int b = 0; b < a && accepted[a]; ++b) {
           if (!accepted[b] || touch[b].wall != touch[a].wall) continue;
-          if (touch[b].key == touch[a].key) { accepted[a] = false; break; }
+          const double gap[3] = {touch[a].q[0] - touch[b].q[0], touch[a].q[1] - touch[b].q[1], touch[a].q[2] - touch[b].q[2]};
+          if (touch[b].key == touch[a].key || norm2(gap) < kSameContact * kSameContact * ri * ri) {
+            accepted[a] = false;  // same feature, or the same point reached through a neighbour triangle
+            break;
+          }
           if (touch[a].kind == FeatureKind::Face || touch[b].kind == FeatureKind::Vertex) continue;
           // nodes of feature a (those with non-zero weight) all among b's triangle nodes (face) or edge nodes
           bool inside = true;
