@@ -317,6 +317,7 @@ class Engine {
     if (options.probes.empty()) {
       command("fix integrate all nve/sphere");
       deposit(study, deck);
+      for (const auto& line : deck.tool_clearance) command(line);
     } else {
       const auto materials = study.soil.layers;
       for (std::size_t p = 0; p < options.probes.size(); ++p) {
@@ -337,15 +338,19 @@ class Engine {
       }
     }
 
+    for (const auto& line : deck.tools) command(line);
     start_step_ = lmp_->update->ntimestep;
-    for (std::size_t g = 0; g < tools_.size(); ++g) attachMesh(g);
+    for (std::size_t g = 0; g < tools_.size(); ++g) findMesh(g);
     // The per-step hook: fix external calls afterForces() in post_force, after the tool wall (defined
     // earlier) has stored this step's contact forces.
     command("fix demfem_node_forces all external pf/callback 1 1");
     auto* hook = dynamic_cast<LAMMPS_NS::FixExternal*>(lmp_->modify->find_fix_id("demfem_node_forces"));
     if (!hook) throw CouplingError(ErrorCode::Internal, "LIGGGHTS did not create the node-force hook (fix external)");
     hook->set_callback(&Engine::afterForces, this);
-    mesh_edited_ = true;  // the first run must set everything up
+    // Set-up without a step: distributes the meshes over the ranks (before it every rank holds all).
+    command("run 0 post no");
+    for (std::size_t g = 0; g < tools_.size(); ++g) checkMesh(g);
+    mesh_edited_ = false;
   }
 
   void deposit(const study::Study& study, const InputDeck& deck) {
@@ -369,15 +374,19 @@ class Engine {
     }
   }
 
-  // Finds the tool's mesh fix and checks that its triangles are the keypoint triangles, in order.
-  void attachMesh(std::size_t g) {
+  void findMesh(std::size_t g) {
     auto& tool = tools_[g];
     const std::string id = "tool" + std::to_string(g);
     tool.mesh_fix = dynamic_cast<LAMMPS_NS::FixMeshSurface*>(lmp_->modify->find_fix_id(id.c_str()));
     if (!tool.mesh_fix || !tool.mesh_fix->meshforceContactStress())
       throw CouplingError(ErrorCode::Internal, "LIGGGHTS mesh of tool \"" + tool.name + "\" not found");
+    tool.node_access = std::make_unique<NodeArrayAccess>(lmp_, tool.mesh_fix->triMesh());
+  }
+
+  // Checks that the distributed mesh holds the keypoint triangles, each once, and finds the id offset.
+  void checkMesh(std::size_t g) {
+    auto& tool = tools_[g];
     LAMMPS_NS::TriMesh* mesh = tool.mesh_fix->triMesh();
-    tool.node_access = std::make_unique<NodeArrayAccess>(lmp_, mesh);
     int lowest = std::numeric_limits<int>::max();
     long long owned = mesh->sizeLocal();
     for (int i = 0; i < mesh->sizeLocal(); ++i) lowest = std::min(lowest, mesh->id(i));
@@ -386,9 +395,10 @@ class Engine {
     tool.id_offset = lowest;
     if (owned != static_cast<long long>(tool.surface.triangles.size()))
       throw CouplingError(ErrorCode::Internal, "LIGGGHTS mesh of tool \"" + tool.name + "\" has " +
-                                                   std::to_string(owned) + " triangles, the keypoint surface " +
-                                                   std::to_string(tool.surface.triangles.size()));
-    for (int i = 0; i < mesh->sizeLocal(); ++i) copyKeypoints(tool, i);  // throws on a mismatch
+                                                   std::to_string(owned) + " triangles over all ranks, the keypoint "
+                                                   "surface " + std::to_string(tool.surface.triangles.size()));
+    const int all = mesh->sizeLocal() + mesh->sizeGhost();
+    for (int i = 0; i < all; ++i) copyKeypoints(tool, i);  // throws on a mismatch
   }
 
   static Vec3 rigidOffset(const RigidMotion& m, double t) {

@@ -360,24 +360,6 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   s.push_back("fix bin_z_lo " + wall + " zplane 0");
   s.push_back("fix bin_z_hi " + wall + " zplane " + num(soil.bin_length_m));
 
-  // Tools: one stress mesh each, a single mesh wall over all of them, a variable-velocity mover.
-  if (!study.tools.empty()) {
-    std::string meshes;
-    for (std::size_t i = 0; i < study.tools.size(); ++i) {
-      const std::string id = "tool" + std::to_string(i);
-      s.push_back("fix " + id + " all mesh/surface/stress file " + (stl_dir / (id + ".stl")).string() + " type " +
-                  std::to_string(typeOf(materials, study.tools[i].dem_material)));
-      meshes += " " + id;
-    }
-    s.push_back("fix tool_wall all wall/gran " + model + " mesh n_meshes " + std::to_string(study.tools.size()) +
-                " meshes" + meshes + " store_force_contact_stress yes");
-    for (std::size_t i = 0; i < study.tools.size(); ++i) {
-      const std::string id = "tool" + std::to_string(i);
-      for (const char* c : {"_vx", "_vy", "_vz"}) s.push_back("variable " + id + c + " equal 0");
-      s.push_back("fix " + id + "_move all move/mesh mesh " + id + " linear/variable v_" + id + "_vx v_" + id +
-                  "_vy v_" + id + "_vz");
-    }
-  }
   s.push_back("compute kinetic_energy all ke");
   s.push_back("compute rotational_energy all erotate/sphere");
   s.push_back("thermo_style custom step atoms c_kinetic_energy c_rotational_energy");
@@ -416,6 +398,37 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
                 std::to_string(primeSeed(soil.deposition_seed, 3 * l + 2)) + " distributiontemplate " + tag +
                 "_sizes insert_every once overlapcheck yes all_in yes volumefraction_region " +
                 num(std::min(0.45, kInsertSolidFraction * area_scale)) + " region " + tag + "_slab");
+  }
+  // Room for the tools: particles within r_max of a tool's start position are removed before the
+  // tool's mesh appears (the tool is inserted into the settled soil).
+  for (std::size_t i = 0; i < study.tools.size(); ++i) {
+    const auto& g = study.tools[i].geometry;
+    const auto origin = toolStartOrigin(study, i);
+    const std::string id = "tool" + std::to_string(i) + "_space";
+    deck.tool_clearance.push_back(
+        "region " + id + " block " + num(origin[0] - g.width_m / 2 - r_max) + " " + num(origin[0] + g.width_m / 2 + r_max) +
+        " " + num(origin[1] - r_max) + " " + num(origin[1] + g.length_m + r_max) + " " +
+        num(origin[2] - g.thickness_m / 2 - r_max) + " " + num(origin[2] + g.thickness_m / 2 + r_max) + " units box");
+    deck.tool_clearance.push_back("delete_atoms region " + id + " compress yes");
+  }
+  // Tools: one stress mesh each, a single mesh wall over all of them, a variable-velocity mover.
+  auto& t = deck.tools;
+  if (!study.tools.empty()) {
+    std::string meshes;
+    for (std::size_t i = 0; i < study.tools.size(); ++i) {
+      const std::string id = "tool" + std::to_string(i);
+      t.push_back("fix " + id + " all mesh/surface/stress file " + (stl_dir / (id + ".stl")).string() + " type " +
+                  std::to_string(typeOf(materials, study.tools[i].dem_material)));
+      meshes += " " + id;
+    }
+    t.push_back("fix tool_wall all wall/gran " + model + " mesh n_meshes " + std::to_string(study.tools.size()) +
+                " meshes" + meshes + " store_force_contact_stress yes");
+    for (std::size_t i = 0; i < study.tools.size(); ++i) {
+      const std::string id = "tool" + std::to_string(i);
+      for (const char* c : {"_vx", "_vy", "_vz"}) t.push_back("variable " + id + c + " equal 0");
+      t.push_back("fix " + id + "_move all move/mesh mesh " + id + " linear/variable v_" + id + "_vx v_" + id +
+                  "_vy v_" + id + "_vz");
+    }
   }
   return deck;
 }

@@ -55,7 +55,7 @@ TEST_CASE("layers become atom types and interactions per-type-pair tables", "[li
         "0.40000000000000002 0.29999999999999999 0 0 "
         "0.40000000000000002 0.29999999999999999 0 0");
   CHECK(lineStarting(deck.setup, "pair_style") == "pair_style gran model hooke tangential history rolling_friction cdt");
-  CHECK(lineStarting(deck.setup, "fix tool_wall") ==
+  CHECK(lineStarting(deck.tools, "fix tool_wall") ==
         "fix tool_wall all wall/gran model hooke tangential history rolling_friction cdt mesh n_meshes 1 meshes tool0 "
         "store_force_contact_stress yes");
   // every layer gets its own insertion of its own type

@@ -6,9 +6,10 @@
 //   reaches LIGGGHTS: LIGGGHTS stops the process on an input error, so what it would reject is
 //   reported here as adapter::CouplingError instead.
 // - Construction deposits the soil (insert, settle under gravity until the kinetic energy falls below
-//   soil.settle_kinetic_energy_J) with the tools already in place at their start positions
-//   (toolStartOrigin(), velocity zero); time() is 0 after it. With BackendOptions::probes set, the
-//   soil is replaced by fixed probe spheres (no deposition, no time integration of particles).
+//   soil.settle_kinetic_energy_J), removes the particles in the tools' way and puts the tools at
+//   their start positions (toolStartOrigin(), velocity zero); time() is 0 after it. With
+//   BackendOptions::probes set, the soil is replaced by fixed probe spheres (no deposition, no time
+//   integration of particles).
 // - Node forces: accumulated at every DEM step from the per-contact forces LIGGGHTS stores for the
 //   tool meshes (wall/gran store_force_contact_stress) and split to the contact triangle's keypoints
 //   by the barycentric weights of the contact point; reduced over all MPI ranks.

@@ -15,7 +15,9 @@
 //   by writeToolStl), translated to its start position (toolStartOrigin) and moved by
 //   `move/mesh ... linear/variable` with the equal-style variables `tool<i>_vx/_vy/_vz` (m/s).
 // - Deposition: each layer is inserted once by insert/pack into its own slab of a stretched stack
-//   (bottom layer lowest), so that after settling under gravity the layers lie in study order.
+//   (bottom layer lowest), so that after settling under gravity the layers lie in study order. The
+//   tools come after it: particles closer than r_max to a tool's start position are deleted, then the
+//   tool meshes are created (a tool present during deposition keeps particles from settling).
 // - Errors: translateStudy() throws adapter::CouplingError(Unsupported) naming the study field when
 //   the study uses a model LIGGGHTS-PUBLIC does not have (the EDEM-style laws), or BadRequest when a
 //   value would make LIGGGHTS stop the process (LIGGGHTS input errors call exit()).
@@ -33,8 +35,10 @@ namespace demfem::liggghts {
 
 // Commands split in the phases the backend runs them in.
 struct InputDeck {
-  std::vector<std::string> setup;       // box, materials, contact model, walls, tools, integrator
-  std::vector<std::string> deposition;  // particle templates and insertion (run before settling)
+  std::vector<std::string> setup;           // box, materials, contact model, bin walls, gravity, output
+  std::vector<std::string> deposition;      // particle templates and insertion (run before settling)
+  std::vector<std::string> tool_clearance;  // after settling: remove particles in the tools' way
+  std::vector<std::string> tools;           // tool meshes, their wall and movers
   int atom_type_count = 0;
   double time_step_s = 0;
   double insertion_top_m = 0;           // top of the insertion stack (y)
