@@ -248,7 +248,7 @@ adapter::PlateSurface toolSurface(const study::Study& study, std::size_t tool_in
 std::array<double, 3> toolStartOrigin(const study::Study& study, std::size_t tool_index) {
   const auto& tool = study.tools.at(tool_index);
   // Local frame: tip at y = 0, front face at z = +T/2 (adapter/plate_surface.hpp).
-  return {0.0, study.soil.fill_height_m - tool.motion.depth_m,
+  return {study.soil.bin_width_m / 2, study.soil.fill_height_m + study.soil.diameter_max_m,
           tool.motion.start_z_m - tool.geometry.thickness_m / 2};
 }
 
@@ -286,21 +286,22 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   deck.atom_type_count = static_cast<int>(n_types);
   deck.time_step_s = demTimeStep(study);
 
-  const double half_w = soil.bin_width_m / 2;
+  const double w = soil.bin_width_m;
   const double r_max = soil.diameter_max_m / 2;
   const double stretch = kSettledSolidFraction / kInsertSolidFraction;
   deck.insertion_top_m = stretch * soil.fill_height_m + soil.diameter_max_m;
 
   // Box: the bin, the insertion stack and every tool over its whole stroke (a mesh element outside
   // the box is a fatal LIGGGHTS error), with a margin.
-  double z_lo = 0, z_hi = soil.bin_length_m, y_hi = deck.insertion_top_m, x_hi = half_w;
+  double z_lo = 0, z_hi = soil.bin_length_m, y_hi = deck.insertion_top_m, x_lo = 0, x_hi = w;
   for (std::size_t i = 0; i < study.tools.size(); ++i) {
     const auto& tool = study.tools[i];
     const auto origin = toolStartOrigin(study, i);
     z_lo = std::min(z_lo, origin[2] - tool.geometry.thickness_m);
     z_hi = std::max(z_hi, origin[2] + tool.motion.stroke_m + 2 * tool.geometry.thickness_m);
     y_hi = std::max(y_hi, origin[1] + tool.geometry.length_m);
-    x_hi = std::max(x_hi, tool.geometry.width_m / 2);
+    x_lo = std::min(x_lo, origin[0] - tool.geometry.width_m / 2);
+    x_hi = std::max(x_hi, origin[0] + tool.geometry.width_m / 2);
   }
   const double margin = 0.1 * std::max(soil.bin_length_m, y_hi) + 4 * r_max;
   auto& s = deck.setup;
@@ -311,7 +312,7 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   s.push_back("communicate single vel yes");
   s.push_back("units si");
   s.push_back("processors 1 1 *");  // slabs along the bin (z), the long axis
-  s.push_back("region domain block " + num(-x_hi - margin) + " " + num(x_hi + margin) + " " + num(-margin) + " " +
+  s.push_back("region domain block " + num(x_lo - margin) + " " + num(x_hi + margin) + " " + num(-margin) + " " +
               num(y_hi + margin) + " " + num(z_lo - margin) + " " + num(z_hi + margin) + " units box");
   s.push_back("create_box " + std::to_string(n_types) + " domain");
   s.push_back("neighbor " + num(0.25 * soil.diameter_max_m) + " bin");
@@ -355,8 +356,8 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   const std::string wall = "all wall/gran " + model + " primitive type " +
                            std::to_string(typeOf(materials, soil.bin_material));
   s.push_back("fix bin_floor " + wall + " yplane 0");
-  s.push_back("fix bin_x_lo " + wall + " xplane " + num(-half_w));
-  s.push_back("fix bin_x_hi " + wall + " xplane " + num(half_w));
+  s.push_back("fix bin_x_lo " + wall + " xplane 0");
+  s.push_back("fix bin_x_hi " + wall + " xplane " + num(w));
   s.push_back("fix bin_z_lo " + wall + " zplane 0");
   s.push_back("fix bin_z_hi " + wall + " zplane " + num(soil.bin_length_m));
 
@@ -391,7 +392,7 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
     d.push_back(distribution);
     const double y_lo = stretch * (soil.fill_height_m - layer.bottom_depth_m);
     const double y_hi_layer = stretch * (soil.fill_height_m - layer.top_depth_m);
-    d.push_back("region " + tag + "_slab block " + num(-half_w + r_max) + " " + num(half_w - r_max) + " " +
+    d.push_back("region " + tag + "_slab block " + num(r_max) + " " + num(w - r_max) + " " +
                 num(y_lo + r_max) + " " + num(y_hi_layer + r_max) + " " + num(r_max) + " " +
                 num(soil.bin_length_m - r_max) + " units box");
     d.push_back("fix " + tag + "_insert all insert/pack seed " +

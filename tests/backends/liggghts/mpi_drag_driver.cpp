@@ -28,9 +28,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     auto backend = liggghts::makeBackend(study);
-    auto motion = backend->rigidMotion("tool");
-    motion.velocity_m_s = {0, 0, 0.3};
-    backend->setRigidMotion("tool", motion);
+    study.tools[0].motion.velocity_m_s = 0.3;
+    liggghts::testing::insertAndStartDrag(*backend, study, study.tools[0]);
     double draught = 0, worst_split_error = 0;
     const int intervals = 10;
     for (int i = 0; i < intervals; ++i) {

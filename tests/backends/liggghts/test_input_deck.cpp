@@ -122,7 +122,8 @@ TEST_CASE("the tool STL holds the keypoint triangles at the start position, outw
   const auto s = smallStudy();
   const auto surface = liggghts::toolSurface(s, 0);
   const auto origin = liggghts::toolStartOrigin(s, 0);
-  CHECK(origin[1] == Approx(0.02));            // tip 20 mm below the 40 mm surface
+  CHECK(origin[0] == Approx(0.04));            // centred across the 80 mm bin
+  CHECK(origin[1] == Approx(0.0505));          // tip one largest diameter above the 40 mm surface
   CHECK(origin[2] == Approx(-0.0015));         // front face at start_z = 0
   const auto file = std::filesystem::temp_directory_path() / "demfem-liggghts-test-tool.stl";
   liggghts::writeToolStl(surface, origin, file);

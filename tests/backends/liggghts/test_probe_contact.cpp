@@ -2,6 +2,7 @@
 // law evaluated on the geometry we set (bent by setNodePositions, normals updated from the first step),
 // split to keypoints so that their sum is the stress mesh's total force.
 #include "demfem/backends/liggghts/backend.hpp"
+#include "demfem/backends/liggghts/input_deck.hpp"
 #include "small_study.hpp"
 
 #include <catch2/catch.hpp>
@@ -32,8 +33,7 @@ struct Setup {
   Vec3 origin{};        // tool origin in the bin
   Setup() {
     study.tools[0].motion.start_z_m = 0.08;  // inside the bin, away from its end walls
-    origin = {0.0, study.soil.fill_height_m - study.tools[0].motion.depth_m,
-              0.08 - study.tools[0].geometry.thickness_m / 2};
+    origin = liggghts::toolStartOrigin(study, 0);
     centre_local = {0.0033, 0.0533, study.tools[0].geometry.thickness_m / 2 + kRadius - kOverlap};
   }
   liggghts::BackendOptions probe() const {

@@ -4,8 +4,8 @@
 //
 // Contract
 // - Units: the deck uses LIGGGHTS `units si` (m, kg, s, N), like the Study.
-// - Bin frame (DESIGN.md section 10): x across the bin, centred (x in [-W/2, W/2]); y up, floor at
-//   y = 0; z along the bin, z in [0, bin length]. The bin walls are primitive planes; the box is
+// - Bin frame (DESIGN.md section 10): x across the bin, x in [0, W]; y up, floor at y = 0; z along the
+//   bin, z in [0, bin length] (the frame of the built-in backend and the FEM client). The bin walls are primitive planes; the box is
 //   larger than the bin so that the tools stay inside it over their whole stroke.
 // - Atom types: 1..P the particle materials in the order they first appear in soil.layers, then the
 //   bin-wall material, then each tool's material (types are per material, so two tools of one
@@ -58,7 +58,8 @@ double hookeNormalStiffness(double youngs_i_Pa, double poisson_i, double youngs_
                             double characteristic_velocity_m_s);
 
 // Bin position of tool i's local origin at the start (after deposition): centred across the bin,
-// tip `motion.depth_m` below the settled surface (soil.fill_height_m), front face at motion.start_z_m.
+// tip one largest particle diameter above the settled surface (soil.fill_height_m), front face at
+// motion.start_z_m. The client inserts the tool to its depth (setRigidMotion), as the FEM client does.
 std::array<double, 3> toolStartOrigin(const study::Study& study, std::size_t tool_index);
 
 // The keypoint surface of tool i (plate tools only; other geometry kinds throw Unsupported).
