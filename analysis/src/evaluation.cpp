@@ -86,19 +86,16 @@ EvaluatedRun evaluateSoilBinRun(const Recording& rec, const EvaluationSettings& 
       deformation[i] = rec.deformation[i] * rec.deformation_factor_mm_per_unit;
     }
     // Step 2: initial deformation value.
-    double baseline_sum = 0.0;
-    std::size_t baseline_count = 0;
-    for (std::size_t i = 0; i < n && (baseline_count == 0 || rec.time_s[i] <= rec.time_s.front() + settings.baseline_duration_s); ++i) {
-      baseline_sum += deformation[i];
-      ++baseline_count;
-    }
-    const double d0 = baseline_sum / static_cast<double>(baseline_count);
+    std::vector<double> baseline;
+    for (std::size_t i = 0; i < n && (baseline.empty() || rec.time_s[i] <= rec.time_s.front() + settings.baseline_duration_s); ++i)
+      baseline.push_back(deformation[i]);
+    const SignalStatistics initial = meanAndStdDev(baseline);
+    const double d0 = initial.mean;
     // Step 3: line through the 10 % and 20 % points, intersected with d = d0.
-    const auto max_it = std::max_element(deformation.begin(), deformation.end());
-    const double d_max = *max_it;
-    if (!(d_max > d0))
-      throw InputError(file + ": column 'deformation': never rises above its initial value " + fmt(d0) +
-                       " mm: no start can be found (Section 2.3)");
+    const double d_max = *std::max_element(deformation.begin(), deformation.end());
+    if (!(d_max - d0 > std::max(3.0 * initial.std_dev, 1e-9 * std::abs(d0))))
+      throw InputError(file + ": column 'deformation': never rises clearly above its initial value " + fmt(d0) + " mm (maximum " +
+                       fmt(d_max) + " mm, baseline noise " + fmt(initial.std_dev) + " mm): no start can be found (Section 2.3)");
     const double level_low = d0 + settings.start_low_fraction * (d_max - d0);
     const double level_high = d0 + settings.start_high_fraction * (d_max - d0);
     const auto crossing_low = firstCrossing(rec.time_s, deformation, level_low);

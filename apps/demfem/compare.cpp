@@ -1,14 +1,60 @@
+// demfem compare: measured against simulated recordings per case (paper Sections 3.1, 3.6; Figs. 7,
+// 8, 9, 14, 15, 17); tables, plots and a report (docs/analysis.md).
+#include "analysis_options.hpp"
 #include "commands.hpp"
 
-#include <stdexcept>
+#include <iostream>
 
 namespace demfem::cli {
 
-// Placeholder until its issue lands: says clearly which part is missing.
 void addCompareCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("compare", "Compare measured and simulated runs (paper Sections 3.1, 3.6) [not built yet: measured-data issue]");
-  cmd->allow_extras();
-  cmd->callback([] { throw std::runtime_error("'demfem compare' is not built yet (measured-data issue)"); });
+  struct Options {
+    AnalysisOptions analysis;
+    std::string measured;
+    std::string simulated;
+  };
+  auto options = std::make_shared<Options>();
+  options->analysis.out_dir = "comparison";
+  auto* cmd = app.add_subcommand("compare",
+                                 "Compare measured and simulated recordings case by case (tool + depth_mm or mass_kg from the sidecars): "
+                                 "mean differences, FFT power-law fits, calibration-weight frequency, damping and correlation");
+  cmd->add_option("measured", options->measured, "Measured recording or directory of recordings")->required();
+  cmd->add_option("simulated", options->simulated, "Simulated recording or directory of recordings")->required();
+  addAnalysisOptions(*cmd, options->analysis);
+  cmd->add_option("--fft-low-hz", options->analysis.settings.fft_low_Hz, "Lowest frequency of the power-law fits (default: common band)");
+  cmd->add_option("--fft-high-hz", options->analysis.settings.fft_high_Hz, "Highest frequency of the power-law fits (default: common band)");
+  std::string& json_target = addJsonOption(*cmd);
+  cmd->callback([options, &json_target] {
+    runAnalysis([&] {
+      finishAnalysisOptions(options->analysis);
+      const auto& settings = options->analysis.settings;
+      if (!(settings.fft_high_Hz > settings.fft_low_Hz))
+        throw InputError("--fft-low-hz/--fft-high-hz: the band is empty (" + std::to_string(settings.fft_low_Hz) + " to " +
+                         std::to_string(settings.fft_high_Hz) + " Hz)");
+      const auto measured = analysis::readRecordings({options->measured});
+      const auto simulated = analysis::readRecordings({options->simulated});
+      const auto result = analysis::compare(measured, simulated, settings);
+
+      analysis::StagedOutput out(options->analysis.out_dir);
+      const analysis::GnuplotRenderer renderer(options->analysis.gnuplot);
+      analysis::writeComparison(result, settings, out, options->analysis.no_plots ? nullptr : &renderer);
+      out.commit();
+      writeJson(json_target, analysis::toJson(result, settings));
+
+      if (json_target != "-") {
+        for (const auto& c : result.soil_bin)
+          std::cout << c.key.title() << ": force mean difference " << c.force_difference_percent << " %, deformation mean difference "
+                    << c.deformation_difference_percent << " %, fitted deformation spectrum ratio " << c.deformation_spectrum.mean_fitted_ratio
+                    << "\n";
+        for (const auto& c : result.calibration)
+          std::cout << c.key.title() << ": deformation frequency " << c.measured.deformation.frequency_Hz.mean << " / "
+                    << c.simulated.deformation.frequency_Hz.mean << " Hz (measured / simulated), correlation "
+                    << c.correlations.front().deformation.correlation << "\n";
+        for (const auto& u : result.unmatched_cases) std::cout << "not compared: " << u << "\n";
+        std::cout << "report: " << (out.directory() / "report.md").string() << "\n";
+      }
+    });
+  });
 }
 
 }  // namespace demfem::cli

@@ -1,0 +1,60 @@
+// Options shared by `demfem evaluate` and `demfem compare` (evaluate.cpp, compare.cpp): the
+// Section 2.3 settings, output directory, plots, and turning analysis errors into exit codes.
+#pragma once
+
+#include "demfem/analysis/workflow.hpp"
+#include "demfem/cli/cli_support.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <memory>
+#include <string>
+
+namespace demfem::cli {
+
+struct AnalysisOptions {
+  analysis::AnalysisSettings settings;
+  std::string end_signal = "force";
+  std::string out_dir;
+  std::string gnuplot = "gnuplot";
+  bool no_plots = false;
+};
+
+inline void addAnalysisOptions(CLI::App& cmd, AnalysisOptions& options) {
+  auto& e = options.settings.evaluation;
+  cmd.add_option("--out", options.out_dir, "Output directory (tables, evaluated curves, plots/, report.md)")->capture_default_str();
+  cmd.add_option("--window-begin-mm", e.window_begin_mm, "Start of the statistics window in tool displacement (mm)")->capture_default_str();
+  cmd.add_option("--window-end-mm", e.window_end_mm, "End of the statistics window in tool displacement (mm)")->capture_default_str();
+  cmd.add_option("--end-at", options.end_signal, "Signal whose maximum ends a raw soil-bin run (Section 2.3)")
+      ->check(CLI::IsMember({"force", "deformation"}))
+      ->capture_default_str();
+  cmd.add_option("--baseline-s", e.baseline_duration_s, "Leading span averaged for the initial deformation value (s)")->capture_default_str();
+  cmd.add_option("--steady-fraction", options.settings.step_response.steady_fraction,
+                 "Final fraction of a calibration-weight run averaged for its steady value")
+      ->check(CLI::Range(0.01, 0.9))
+      ->capture_default_str();
+  cmd.add_flag("--no-plots", options.no_plots, "Do not draw plots (the report says so)");
+  cmd.add_option("--gnuplot", options.gnuplot, "gnuplot executable used for the SVG plots")->capture_default_str();
+}
+
+// Checks the option values; throws InputError (exit code 2) for inconsistent ones.
+inline void finishAnalysisOptions(AnalysisOptions& options) {
+  auto& e = options.settings.evaluation;
+  e.end_signal = options.end_signal == "force" ? analysis::EndSignal::Force : analysis::EndSignal::Deformation;
+  if (!(e.window_begin_mm >= 0.0 && e.window_end_mm > e.window_begin_mm))
+    throw InputError("--window-begin-mm/--window-end-mm: need 0 <= begin < end, got " + std::to_string(e.window_begin_mm) + " and " +
+                     std::to_string(e.window_end_mm));
+  if (!(e.baseline_duration_s >= 0.0)) throw InputError("--baseline-s: must be >= 0");
+}
+
+// Runs `body`, mapping the analysis library's input errors to the CLI's (exit code 2).
+template <class Body>
+void runAnalysis(Body&& body) {
+  try {
+    body();
+  } catch (const analysis::InputError& e) {
+    throw InputError(e.what());
+  }
+}
+
+}  // namespace demfem::cli
