@@ -9,7 +9,9 @@ std::string formatIssues(const std::string& file, const std::vector<Issue>& issu
   std::ostringstream out;
   for (std::size_t i = 0; i < issues.size(); ++i) {
     if (i) out << '\n';
-    out << file << ": " << issues[i].path << ": " << issues[i].message;
+    out << file << ": ";
+    if (!issues[i].path.empty()) out << issues[i].path << ": ";
+    out << issues[i].message;
   }
   return out.str();
 }
@@ -17,5 +19,18 @@ std::string formatIssues(const std::string& file, const std::vector<Issue>& issu
 
 StudyError::StudyError(std::string file, std::vector<Issue> issues)
     : std::runtime_error(formatIssues(file, issues)), file_(std::move(file)), issues_(std::move(issues)) {}
+
+const DemMaterial& Study::material(const std::string& name) const {
+  for (const DemMaterial& m : soil.materials)
+    if (m.name == name) return m;
+  throw std::out_of_range("study " + this->name + ": no material \"" + name + "\" in /soil/materials");
+}
+
+const Interaction& Study::interaction(const std::string& a, const std::string& b) const {
+  for (const Interaction& i : soil.interactions)
+    if ((i.a == a && i.b == b) || (i.a == b && i.b == a)) return i;
+  throw std::out_of_range("study " + name + ": no interaction for (\"" + a + "\", \"" + b +
+                          "\") in /soil/interactions");
+}
 
 }  // namespace demfem::study

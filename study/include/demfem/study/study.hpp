@@ -6,28 +6,36 @@
 // - A Study returned by loadStudy() has passed validation: every field has the documented type,
 //   unit and range, cross-field rules hold (layers tile the bin depth, the interaction table covers
 //   every material pair, constraints lie on the tool). Code using a Study may rely on that.
-// - Frames (DESIGN.md section 10): bin frame x across, y up (y = 0 bin floor), z along the bin; tool
+// - Frames (DESIGN.md section 10): bin frame x across, y up (y = 0 bin floor), z along the bin, with
+//   the origin at a bottom corner so the soil fills x in [0, bin_width], z in [0, bin_length]; tool
 //   local frame x across the width, y along the length (tip y = 0, top y = L), z the travel direction
-//   (through the thickness). The tool moves in +z of the bin frame.
+//   (through the thickness), origin at the tip, centred in x and z. The tool moves in +z of the bin
+//   frame.
+// - The file format (every key, unit, range and default) is documented in docs/study-file.md.
 #pragma once
+
+#include <nlohmann/json_fwd.hpp>
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace demfem::study {
 
-// One validation problem: where (JSON pointer, e.g. "/tools/0/fem/E_Pa") and what.
+// One validation problem: where (JSON pointer, e.g. "/tools/0/fem/E_Pa"; empty = the whole file,
+// e.g. a syntax error whose message gives line and column) and what.
 struct Issue {
   std::string path;
   std::string message;
+  bool operator==(const Issue&) const = default;
 };
 
-// Thrown by loadStudy() with every problem found, not just the first. what() lists them as
-// "FILE: PATH: MESSAGE" lines.
+// Thrown by loadStudy()/parseStudy() with every problem found, not just the first. what() lists them
+// as "FILE: PATH: MESSAGE" lines ("FILE: MESSAGE" when the path is empty).
 class StudyError : public std::runtime_error {
  public:
   StudyError(std::string file, std::vector<Issue> issues);
@@ -46,6 +54,7 @@ struct DemMaterial {
   double youngs_Pa = 0;
   double poisson = 0;
   double yield_Pa = 0;  // EDEM hysteretic spring: K1 = 5 R* min(Y_i, Y_j); 0 = not used
+  bool operator==(const DemMaterial&) const = default;
 };
 
 // Contact law selection (DESIGN.md section 11). EDEM-style and LIGGGHTS-compatible variants.
@@ -67,6 +76,7 @@ struct ContactModel {
   double coefficient_max_elastic_stiffness = 2.0;
   double coefficient_plasticity_depth = 0.1;
   double coefficient_adhesion_stiffness = 0.0;
+  bool operator==(const ContactModel&) const = default;
 };
 
 // Interaction between two materials (symmetric): Table 2 restitution/cohesion, Table 4 friction.
@@ -76,6 +86,7 @@ struct Interaction {
   double static_friction = 0.5;
   double rolling_friction = 0.0;
   double cohesion_J_m3 = 0.0;
+  bool operator==(const Interaction&) const = default;
 };
 
 // A horizontal soil layer, depth measured down from the settled soil surface (Section 2.9, Fig. 4a).
@@ -83,6 +94,7 @@ struct Layer {
   std::string material;  // DemMaterial name of the particles in this layer
   double top_depth_m = 0;
   double bottom_depth_m = 0;
+  bool operator==(const Layer&) const = default;
 };
 
 struct Soil {
@@ -98,6 +110,7 @@ struct Soil {
   ContactModel contact;
   std::uint64_t deposition_seed = 1;
   double settle_kinetic_energy_J = 1e-6;   // deposition ends below this total kinetic energy
+  bool operator==(const Soil&) const = default;
 };
 
 // Tool geometry: a plate meshed by demfem, a Gmsh mesh, or externally assembled M and K.
@@ -116,6 +129,7 @@ struct ToolGeometry {
   // Cone penetrometer (Fig. 6c): projected area and full apex angle.
   double cone_area_m2 = 5e-4;
   double cone_angle_rad = 1.0471975511965976;
+  bool operator==(const ToolGeometry&) const = default;
 };
 
 enum class ElementOrder { Linear, Quadratic };
@@ -129,6 +143,7 @@ struct ToolFem {
   double alpha_s = 0;
   double beta_per_s = 0;
   ElementOrder element_order = ElementOrder::Quadratic;
+  bool operator==(const ToolFem&) const = default;
 };
 
 // Section 2.9 constraints, measured from the top of the tool (y = L) downwards.
@@ -136,6 +151,7 @@ struct ToolConstraints {
   double clamp_length_m = 0.040;       // all DOF fixed for y >= L - clamp_length
   double load_cell_from_top_m = 0.065; // z fixed on this line
   double sensor_from_top_m = 0.093;    // deformation sensor point
+  bool operator==(const ToolConstraints&) const = default;
 };
 
 // Rigid motion in the bin frame: inserted vertically to `depth`, then dragged in +z.
@@ -143,8 +159,10 @@ struct ToolMotion {
   double depth_m = 0.018;
   double velocity_m_s = 0.03119;
   double stroke_m = 0.600;
-  double start_z_m = 0.0;          // tool face position along the bin at the start of the stroke
+  double start_z_m = 0.0;          // bin z of the tool's local origin at the start of the stroke
   double insertion_velocity_m_s = 0.05; // vertical insertion before the stroke
+  double center_x_m = 0.125;       // bin x of the tool's local origin (file default: bin centre line)
+  bool operator==(const ToolMotion&) const = default;
 };
 
 struct Tool {
@@ -154,6 +172,7 @@ struct Tool {
   ToolFem fem;
   ToolConstraints constraints;
   ToolMotion motion;
+  bool operator==(const Tool&) const = default;
 };
 
 // Calibration-weight test (Section 2.10.1, Fig. 5): tool clamped horizontally, weight hung suddenly.
@@ -161,10 +180,12 @@ struct WeightDrop {
   double mass_kg = 1.0;
   double pan_rows_from_tip_m = 0.010;  // keypoint rows within this distance of the tip carry the pan
   double duration_s = 3.0;
+  bool operator==(const WeightDrop&) const = default;
 };
 
 struct FemSettings {
   double dt_s = 0.001;            // Table 3 dt_FEM
+  bool operator==(const FemSettings&) const = default;
 };
 
 enum class TimeStepCriterion { Rayleigh, StiffestSpring };
@@ -176,6 +197,7 @@ struct DemSettings {
   std::optional<double> dt_s;        // explicit step, overrides the criterion
   int threads = 1;
   std::uint64_t seed = 1;
+  bool operator==(const DemSettings&) const = default;
 };
 
 enum class ForceAveraging { IntervalMean, Instantaneous };
@@ -184,12 +206,14 @@ struct CouplingSettings {
   std::string endpoint;              // empty: chosen by `demfem run` (ipc://)
   ForceAveraging force_averaging = ForceAveraging::IntervalMean;
   double timeout_s = 30.0;
+  bool operator==(const CouplingSettings&) const = default;
 };
 
 struct OutputSettings {
   std::filesystem::path directory = "out";
   int vtk_every = 0;                 // FEM steps between VTK files; 0 = none
   int csv_every = 1;
+  bool operator==(const OutputSettings&) const = default;
 };
 
 enum class StudyKind { Coupled, DemOnly, WeightDrop, ConePenetration, FemOnly };
@@ -208,20 +232,41 @@ struct Study {
   OutputSettings output;
 
   const DemMaterial& material(const std::string& name) const;  // throws std::out_of_range
+  // The entry for the unordered pair {a, b}; throws std::out_of_range if the table has none.
   const Interaction& interaction(const std::string& a, const std::string& b) const;
+
+  bool operator==(const Study&) const = default;
 };
 
-// Loads and validates a study file. Throws StudyError listing every problem (with JSON paths),
-// or std::runtime_error if the file cannot be read or is not JSON (with line/column).
+// Loads and validates a study file. Throws StudyError listing every problem (with JSON paths); a
+// file that cannot be read or is not JSON is one issue with an empty path (syntax errors give line
+// and column). Relative file names inside the study are resolved against the file's directory.
 Study loadStudy(const std::filesystem::path& file);
 
-// Same, from JSON text; `origin` names the source in messages.
+// Same, from JSON text; `origin` names the source in messages and its directory resolves relative
+// file names inside the study.
 Study parseStudy(const std::string& json_text, const std::string& origin);
 
-// The effective values with units, one "path = value unit" line each (for `demfem validate`).
+// The effective study in file form: file units and key names, every default filled in, only the
+// keys that apply to the study's kind and models. parseStudy(toJson(s).dump(), origin) == s.
+nlohmann::ordered_json toJson(const Study& study);
+
+// The effective values with units, one "path = value unit" line each (for `demfem validate`), in
+// the file's units, e.g. "/tools/0/motion/depth_mm = 18 mm".
 std::string describe(const Study& study);
 
-// Stable content hash of everything that determines the settled soil (for deposit reuse).
+// Stable content hash of everything that determines the settled soil (for deposit reuse): FNV-1a
+// 64 of the canonical JSON text (sorted keys, shortest round-trip numbers) of the bin, fill height,
+// particle sizes, the particle and bin materials, layers, the interactions among them, the contact
+// model, the deposition settings and the DEM backend, time step and thread count. Tools do not
+// enter. 16 lowercase hex digits. Throws std::invalid_argument for kinds without soil.
 std::string soilHash(const Study& study);
+
+// True for the kinds that simulate soil (coupled, dem-only, cone-penetration).
+bool hasSoil(StudyKind kind);
+
+// FNV-1a 64-bit hash of `bytes` (offset basis 14695981039346656037, prime 1099511628211), the hash
+// soilHash() applies to its canonical text.
+std::uint64_t fnv1a64(std::string_view bytes);
 
 }  // namespace demfem::study
