@@ -113,8 +113,9 @@ std::string GnuplotRenderer::script(const Figure& figure) const {
 
   out << "set multiplot layout " << rows << "," << columns << " title " << quoted(figure.title) << "\n";
   for (std::size_t p = 0; p < figure.panels.size(); ++p) {
-    out << "reset\nset grid\nset key top left opaque\n";
+    out << "reset\nset grid\n";
     if (const auto* xy = std::get_if<XYPanel>(&figure.panels[p])) {
+      out << "set key " << xy->key_position << " opaque\n";
       out << "set title " << quoted(xy->title) << "\nset xlabel " << quoted(xy->x_label) << "\nset ylabel " << quoted(xy->y_label) << "\n";
       if (xy->log_x) out << "set logscale x\nset format x '%g'\n";
       if (xy->log_y) out << "set logscale y\nset format y '%g'\n";
@@ -142,7 +143,7 @@ std::string GnuplotRenderer::script(const Figure& figure) const {
       }
     } else {
       const auto& bars = std::get<BarPanel>(figure.panels[p]);
-      out << "set title " << quoted(bars.title) << "\nset ylabel " << quoted(bars.y_label) << "\n";
+      out << "set key below\nset title " << quoted(bars.title) << "\nset ylabel " << quoted(bars.y_label) << "\n";
       out << "set style data histogram\nset style histogram errorbars gap 1 lw 1.5\n"
              "set style fill solid 0.85 border rgb 'black'\nset boxwidth 0.9\nset yrange [0:*]\nset xtics nomirror\n";
       if (bars.groups.empty() || bars.categories.empty()) {

@@ -171,29 +171,39 @@ Figure meansFigure(const std::vector<const PooledCase*>& measured, const std::ve
   return figure;
 }
 
-// Fig. 7: calibration-weight histories; simulated runs shifted by `shift_s`.
-Figure historyFigure(const CaseKey& key, const std::vector<const CalibrationRun*>& runs, const CalibrationRun* simulated, double force_shift_s,
-                     double deformation_shift_s) {
+// Time shifts (s) added to a run's force and deformation histories in a plot.
+struct HistoryShift {
+  double force_s = 0.0;
+  double deformation_s = 0.0;
+};
+
+// Fig. 7: calibration-weight histories, each run shifted by its HistoryShift.
+Figure historyFigure(const CaseKey& key, const std::vector<const CalibrationRun*>& runs, const std::vector<HistoryShift>& shifts,
+                     const CalibrationRun* simulated, const HistoryShift& simulated_shift) {
   Figure figure;
-  figure.title = key.title() + ": calibration-weight response" +
-                 (simulated ? " (simulation shifted so the first local maxima coincide)" : "");
-  XYPanel force{"a) force on the tool", "time (s)", "force (N)", false, false, {}};
-  XYPanel deformation{"b) deformation of the tool", "time (s)", "deformation (mm)", false, false, {}};
-  for (const auto* run : runs) {
-    const std::string title = "measured r" + std::to_string(run->repeat);
-    force.series.push_back(line(title, run->time_s, run->force_N, kMeasuredColor, SeriesStyle::Line, runs.size() > 1 ? 0.8 : 1.5));
-    deformation.series.push_back(line(title, run->time_s, run->deformation_mm, kMeasuredColor, SeriesStyle::Line, runs.size() > 1 ? 0.8 : 1.5));
-    force.series.push_back(line("", run->force.peak_times_s, run->force.peak_values, "#1f4e79", SeriesStyle::Points));
-    deformation.series.push_back(line("", run->deformation.peak_times_s, run->deformation.peak_values, "#1f4e79", SeriesStyle::Points));
+  figure.title = key.title() + ": calibration-weight response" + (simulated ? " (curves shifted so the first local maxima coincide)" : "");
+  XYPanel force{"a) force on the tool", "time (s)", "force (N)", false, false, {}, "bottom right"};
+  XYPanel deformation{"b) deformation of the tool", "time (s)", "deformation (mm)", false, false, {}, "bottom right"};
+  const auto shifted = [](std::vector<double> t, double shift) {
+    for (double& v : t) v += shift;
+    return t;
+  };
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const CalibrationRun& run = *runs[k];
+    const std::string title = "measured r" + std::to_string(run.repeat);
+    const char* color = k == 0 ? kMeasuredColor : kRepeatColor;
+    const double width = k == 0 ? 1.5 : 0.8;
+    force.series.push_back(line(title, shifted(run.time_s, shifts[k].force_s), run.force_N, color, SeriesStyle::Line, width));
+    force.series.push_back(line("", shifted(run.force.peak_times_s, shifts[k].force_s), run.force.peak_values, "#1f4e79", SeriesStyle::Points));
+    deformation.series.push_back(line(title, shifted(run.time_s, shifts[k].deformation_s), run.deformation_mm, color, SeriesStyle::Line, width));
+    deformation.series.push_back(
+        line("", shifted(run.deformation.peak_times_s, shifts[k].deformation_s), run.deformation.peak_values, "#1f4e79", SeriesStyle::Points));
   }
   if (simulated) {
-    const auto shifted = [&](double shift) {
-      std::vector<double> t = simulated->time_s;
-      for (double& v : t) v += shift;
-      return t;
-    };
-    force.series.push_back(line("simulated", shifted(force_shift_s), simulated->force_N, kSimulatedColor, SeriesStyle::DashedLine));
-    deformation.series.push_back(line("simulated", shifted(deformation_shift_s), simulated->deformation_mm, kSimulatedColor, SeriesStyle::DashedLine));
+    force.series.push_back(line("simulated", shifted(simulated->time_s, simulated_shift.force_s), simulated->force_N, kSimulatedColor,
+                                SeriesStyle::DashedLine));
+    deformation.series.push_back(line("simulated", shifted(simulated->time_s, simulated_shift.deformation_s), simulated->deformation_mm,
+                                      kSimulatedColor, SeriesStyle::DashedLine));
   }
   figure.panels = {force, deformation};
   return figure;
@@ -209,17 +219,17 @@ Figure responseFigure(const CalibrationComparison& c) {
     return BarPanel{title, unit, {c.key.title()},
                     {BarGroup{"measured", kMeasuredColor, {m.mean}, {m.std_dev}}, BarGroup{"simulated", kSimulatedColor, {s.mean}, {s.std_dev}}}};
   };
-  figure.panels = {bars("a.1) deformation: steady value", "mm", c.measured.deformation.steady, c.simulated.deformation.steady),
-                   bars("a.2) deformation: frequency", "Hz", c.measured.deformation.frequency_Hz, c.simulated.deformation.frequency_Hz),
-                   bars("a.3) deformation: damping ratio", "1", c.measured.deformation.damping_ratio, c.simulated.deformation.damping_ratio),
-                   bars("b.1) force: steady value", "N", c.measured.force.steady, c.simulated.force.steady),
-                   bars("b.2) force: frequency", "Hz", c.measured.force.frequency_Hz, c.simulated.force.frequency_Hz),
-                   bars("b.3) force: damping ratio", "1", c.measured.force.damping_ratio, c.simulated.force.damping_ratio)};
+  figure.panels = {bars("a.1) deformation: steady value", "deformation (mm)", c.measured.deformation.steady, c.simulated.deformation.steady),
+                   bars("a.2) deformation: frequency", "frequency (Hz)", c.measured.deformation.frequency_Hz, c.simulated.deformation.frequency_Hz),
+                   bars("a.3) deformation: damping ratio", "damping ratio", c.measured.deformation.damping_ratio, c.simulated.deformation.damping_ratio),
+                   bars("b.1) force: steady value", "force (N)", c.measured.force.steady, c.simulated.force.steady),
+                   bars("b.2) force: frequency", "frequency (Hz)", c.measured.force.frequency_Hz, c.simulated.force.frequency_Hz),
+                   bars("b.3) force: damping ratio", "damping ratio", c.measured.force.damping_ratio, c.simulated.force.damping_ratio)};
   return figure;
 }
 
 XYPanel spectrumPanel(const std::string& title, const std::string& unit, const SpectralComparison& s) {
-  XYPanel panel{title, "frequency (Hz)", "amplitude (" + unit + ")", true, true, {}};
+  XYPanel panel{title, "frequency (Hz)", "amplitude (" + unit + ")", true, true, {}, "bottom left"};
   for (std::size_t r = 0; r < s.measured.size(); ++r)
     panel.series.push_back(line(r == 0 ? "measured" : "", s.measured[r].frequency_Hz, s.measured[r].amplitude, kMeasuredColor, SeriesStyle::Points));
   for (std::size_t r = 0; r < s.simulated.size(); ++r)
@@ -372,7 +382,8 @@ void writeEvaluation(const EvaluationResult& result, const AnalysisSettings& set
   if (!pooled.empty()) md << plot(out, renderer, "means", meansFigure(pooled, {}));
   const auto calibration_by_case = detail::groupByCase(result.calibration_runs);
   if (!calibration_by_case.empty()) md << "## Calibration-weight responses\n\nDots: the peaks used for the damping ratio.\n\n";
-  for (const auto& [key, runs] : calibration_by_case) md << plot(out, renderer, key.label() + "_history", historyFigure(key, runs, nullptr, 0, 0));
+  for (const auto& [key, runs] : calibration_by_case)
+    md << plot(out, renderer, key.label() + "_history", historyFigure(key, runs, std::vector<HistoryShift>(runs.size()), nullptr, {}));
   out.writeText("report.md", md.str());
 }
 
@@ -479,9 +490,15 @@ void writeComparison(const ComparisonResult& result, const AnalysisSettings& set
                            plusMinus(m.damping_ratio.mean, m.damping_ratio.std_dev) + " / " + plusMinus(s.damping_ratio.mean, s.damping_ratio.std_dev),
                            shortNum(correlation, 3)});
       }
-      const auto& corr = c.correlations.front();
+      // Align every curve on the first measured repeat: repeat k moves by (its shift to the
+      // simulation) - (the first repeat's), the simulation by the first repeat's shift.
+      const auto& first = c.correlations.front();
+      std::vector<HistoryShift> shifts;
+      for (const auto& corr : c.correlations)
+        shifts.push_back({first.force.shift_s - corr.force.shift_s, first.deformation.shift_s - corr.deformation.shift_s});
       figures << plot(out, renderer, c.key.label() + "_history",
-                      historyFigure(c.key, measured_runs.at(c.key), simulated_runs.at(c.key).front(), corr.force.shift_s, corr.deformation.shift_s));
+                      historyFigure(c.key, measured_runs.at(c.key), shifts, simulated_runs.at(c.key).front(),
+                                    {first.force.shift_s, first.deformation.shift_s}));
       figures << plot(out, renderer, c.key.label() + "_response", responseFigure(c));
     }
     out.writeText("calibration.csv", table.csv());

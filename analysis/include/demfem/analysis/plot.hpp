@@ -49,6 +49,7 @@ struct XYPanel {
   bool log_x = false;
   bool log_y = false;
   std::vector<Series> series;
+  std::string key_position = "top left";  // gnuplot `set key` position, e.g. "bottom right"
 };
 
 struct BarGroup {
