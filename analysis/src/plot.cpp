@@ -35,8 +35,10 @@ void writeNumber(std::ostream& out, double value) {
   else out << "NaN";
 }
 
-// Keeps the minimum and maximum of each of max_points/2 buckets (in their original order).
-std::vector<std::size_t> thinnedIndices(const Series& series, std::size_t max_points) {
+// Keeps the minimum and maximum of each of max_points/2 buckets (in their original order). Buckets
+// are equal ranges of the sample index, or of log10 x on a logarithmic x axis (x ascending), so a
+// log-log spectrum keeps its sparse low-frequency points.
+std::vector<std::size_t> thinnedIndices(const Series& series, std::size_t max_points, bool log_x) {
   const std::size_t n = series.x.size();
   std::vector<std::size_t> keep;
   if (n <= max_points) {
@@ -44,9 +46,17 @@ std::vector<std::size_t> thinnedIndices(const Series& series, std::size_t max_po
     return keep;
   }
   const std::size_t buckets = std::max<std::size_t>(1, max_points / 2);
-  for (std::size_t b = 0; b < buckets; ++b) {
-    const std::size_t begin = b * n / buckets, end = (b + 1) * n / buckets;
-    if (begin >= end) continue;
+  const auto position = [&](std::size_t i) {
+    if (!log_x) return static_cast<double>(i) / static_cast<double>(n);
+    const double lo = std::log10(series.x.front()), hi = std::log10(series.x.back());
+    return hi > lo && series.x[i] > 0.0 ? (std::log10(series.x[i]) - lo) / (hi - lo) : 0.0;
+  };
+  std::size_t begin = 0;
+  for (std::size_t b = 0; b < buckets && begin < n; ++b) {
+    const double upper = static_cast<double>(b + 1) / static_cast<double>(buckets);
+    std::size_t end = begin;
+    while (end < n && (position(end) < upper || b + 1 == buckets)) ++end;
+    if (end == begin) continue;
     std::size_t lo = begin, hi = begin;
     for (std::size_t i = begin; i < end; ++i) {
       if (series.y[i] < series.y[lo]) lo = i;
@@ -54,6 +64,7 @@ std::vector<std::size_t> thinnedIndices(const Series& series, std::size_t max_po
     }
     keep.push_back(std::min(lo, hi));
     if (lo != hi) keep.push_back(std::max(lo, hi));
+    begin = end;
   }
   return keep;
 }
@@ -86,7 +97,7 @@ std::string GnuplotRenderer::script(const Figure& figure) const {
       for (std::size_t s = 0; s < xy->series.size(); ++s) {
         const Series& series = xy->series[s];
         out << "$p" << p << "s" << s << " << EOD\n";
-        for (std::size_t i : thinnedIndices(series, max_points_)) {
+        for (std::size_t i : thinnedIndices(series, max_points_, xy->log_x)) {
           writeNumber(out, series.x[i]);
           out << ' ';
           writeNumber(out, series.y[i]);

@@ -197,3 +197,42 @@ TEST_CASE("gnuplot errors in a figure are reported with gnuplot's message", "[an
   CHECK(readText(dir / "a.svg") == readText(dir / "b.svg"));
   CHECK(renderer.script(good) == readText(dir / "a.gp"));
 }
+
+TEST_CASE("long series are thinned to min/max buckets that keep every extreme, also on log axes", "[analysis]") {
+  Series spike{"spiky", {}, {}, kMeasuredColor, SeriesStyle::Points, 1.0};
+  for (int i = 1; i <= 20000; ++i) {
+    spike.x.push_back(0.01 * i);
+    spike.y.push_back(i == 12345 ? 99.0 : 1.0 / i);  // one spike and a log-log power law
+  }
+  const GnuplotRenderer renderer("gnuplot", 200);
+  for (const bool log_axes : {false, true}) {
+    Figure figure;
+    figure.title = "thinning";
+    figure.panels = {XYPanel{"p", "x", "y", log_axes, log_axes, {spike}}};
+    const std::string script = renderer.script(figure);
+    const auto begin = script.find("$p0s0 << EOD\n") + 13;
+    const std::string block = script.substr(begin, script.find("EOD\n", begin) - begin);
+    const auto lines = std::count(block.begin(), block.end(), '\n');
+    CHECK(lines <= 200);
+    CHECK(lines >= 100);
+    CHECK_THAT(block, Catch::Contains("123.45 99\n"));  // the spike survives
+    CHECK_THAT(block, Catch::StartsWith("0.01 1\n"));     // so does the first (largest) point
+    if (log_axes) CHECK_THAT(block, Catch::Contains("0.02 0.5\n"));  // sparse low decade kept point by point
+  }
+}
+
+TEST_CASE("the shipped example data compare with the offsets they were made with", "[analysis]") {
+  const fs::path data = fs::path(DEMFEM_SOURCE_DIR) / "examples" / "data";
+  AnalysisSettings settings;
+  settings.fft_low_Hz = 0.5;
+  const ComparisonResult result = compare(readRecordings({data / "measured"}), readRecordings({data / "simulated"}), settings);
+  REQUIRE(result.soil_bin.size() == 2);
+  REQUIRE(result.calibration.size() == 1);
+  // analysis/tools/make_example_recordings.cpp: simulated means +8 % at 18 mm, -15 % at 30 mm
+  // (repeats at -3/0/+3 % average to the nominal value; each mean within 1 %).
+  CHECK(result.soil_bin[0].key.depth_mm == 18.0);
+  CHECK(result.soil_bin[0].force_difference_percent == Approx(8.0).margin(1.5));
+  CHECK(result.soil_bin[1].deformation_difference_percent == Approx(-15.0).margin(1.5));
+  CHECK(result.calibration[0].simulated.deformation.frequency_Hz.mean == Approx(3.2).epsilon(0.01));
+  CHECK(result.calibration[0].simulated.deformation.damping_ratio.mean == Approx(0.065).epsilon(0.05));
+}
