@@ -98,22 +98,32 @@ struct DriverState {
   std::uint64_t csv_bytes = 0, displacement_bytes = 0;
 };
 
-class CoupledRun {
- public:
-  CoupledRun(const study::Study& study, adapter::CouplingApi& dem, const CoupledRunOptions& options)
-      : study_(study), tool_(firstTool(study)), dem_(dem), options_(options), dt_(study.fem.dt_s) {
-    rigid_ = study.kind == study::StudyKind::DemOnly || !tool_.fem.deformable;
-    info_ = dem_.info();
-    findGeometry();
-    received_ = dem_.nodePositions(tool_.name);
-    if (received_.size() != 3 * static_cast<std::size_t>(node_count_))
-      throw std::invalid_argument("DEM geometry '" + tool_.name + "' lists " + std::to_string(node_count_) +
-                                  " nodes but sent " + std::to_string(received_.size() / 3) + " positions");
+}  // namespace
+
+struct CoupledDriver::Impl {
+  Impl(const study::Study& study, CoupledRunOptions options)
+      : study_(study), tool_(firstTool(study_)), options_(std::move(options)), dt_(study.fem.dt_s) {
+    rigid_ = study_.kind == study::StudyKind::DemOnly || !tool_.fem.deformable;
     if (!rigid_) buildFem();
     planMotion();
   }
 
-  CoupledRunSummary run() {
+  // Connects the FEM model to the DEM's geometry (keypoint matching), once per run.
+  void attach() {
+    info_ = dem().info();
+    findGeometry();
+    received_ = dem().nodePositions(tool_.name);
+    if (received_.size() != 3 * static_cast<std::size_t>(node_count_))
+      throw std::invalid_argument("DEM geometry '" + tool_.name + "' lists " + std::to_string(node_count_) +
+                                  " nodes but sent " + std::to_string(received_.size() / 3) + " positions");
+    if (!rigid_) match_ = matchKeypoints(*model_, received_, options_.keypoint_tolerance_m);
+  }
+
+  adapter::CouplingApi& dem() const { return *dem_; }
+
+  CoupledRunSummary run(adapter::CouplingApi& dem_api) {
+    dem_ = &dem_api;
+    attach();
     fs::create_directories(options_.output_dir);
     DriverState state;
     if (options_.resume) state = restoreCheckpoint();
@@ -171,7 +181,7 @@ class CoupledRun {
   }
 
   void findGeometry() {
-    for (auto& g : dem_.geometries())
+    for (auto& g : dem().geometries())
       if (g.name == tool_.name) {
         node_count_ = g.node_count;
         triangles_ = std::move(g.triangles);
@@ -183,7 +193,6 @@ class CoupledRun {
 
   void buildFem() {
     model_ = std::make_unique<ReducedModel>(reduce(buildFullModel(tool_)));
-    match_ = matchKeypoints(*model_, received_, options_.keypoint_tolerance_m);
     integrator_ = std::make_unique<ThreeLevelIntegrator>(*model_, dt_, RayleighDamping{tool_.fem.alpha_s, tool_.fem.beta_per_s});
     sensors_ = std::make_unique<Sensors>(*model_, tool_.constraints.sensor_from_top_m);
   }
@@ -212,8 +221,8 @@ class CoupledRun {
   }
 
   void start() {
-    dem_.setRigidMotion(tool_.name, motion(false));
-    if (!rigid_) integrator_->start(toFem(dem_.nodeForces(tool_.name, adapter::ForceMode::Instantaneous)));
+    dem().setRigidMotion(tool_.name, motion(false));
+    if (!rigid_) integrator_->start(toFem(dem().nodeForces(tool_.name, adapter::ForceMode::Instantaneous)));
   }
 
   Eigen::VectorXd toFem(const NodeArray& dem_order) const {
@@ -245,21 +254,21 @@ class CoupledRun {
 
   // One cycle of Fig. 3: forces -> FEM step (Eq 9, Eq 10) -> positions -> simulate(dt_FEM).
   void cycle(DriverState& s) {
-    if (s.step == insertion_steps_) dem_.setRigidMotion(tool_.name, motion(true));
+    if (s.step == insertion_steps_) dem().setRigidMotion(tool_.name, motion(true));
     const auto mode = study_.coupling.force_averaging == study::ForceAveraging::Instantaneous
                           ? adapter::ForceMode::Instantaneous
                           : adapter::ForceMode::IntervalMean;
-    const NodeArray forces = dem_.nodeForces(tool_.name, mode);
+    const NodeArray forces = dem().nodeForces(tool_.name, mode);
     SensorReadings r;
     const Eigen::VectorXd* u = nullptr;
     if (rigid_) {
       r.load_cell_N = rigidLoadCell(forces);
     } else {
       u = &integrator_->step(toFem(forces));               // Eq (9), reactions by Eq (10)
-      dem_.setNodePositions(tool_.name, deformedPositions(*u));
+      dem().setNodePositions(tool_.name, deformedPositions(*u));
       r = sensors_->read(*u, integrator_->reactions());
     }
-    dem_.simulate(dt_);
+    dem().simulate(dt_);
     ++s.step;
     last_ = r;
     if (s.step > insertion_steps_) record(s, r, u);
@@ -361,7 +370,7 @@ class CoupledRun {
     fs::create_directories(checkpointDir());
     // The DEM file is named by its step and the FEM file, written last, names it by that step: a
     // kill between the two leaves the previous checkpoint pair intact.
-    dem_.checkpoint(demCheckpoint(s.step));
+    dem().checkpoint(demCheckpoint(s.step));
     s.csv_bytes = csv_->flushedSize();
     s.displacement_bytes = displacements_ ? displacements_->flushedSize() : 0;
     const fs::path file = checkpointDir() / "fem_state.bin", tmp = file.string() + ".tmp";
@@ -405,16 +414,16 @@ class CoupledRun {
     }
     last_ = get<SensorReadings>(in);
     if (!in) throw std::runtime_error(file.string() + " is truncated");
-    dem_.restore(demCheckpoint(s.step));
+    dem().restore(demCheckpoint(s.step));
     last_checkpoint_step_ = s.step;
-    dem_.setRigidMotion(tool_.name, motion(s.step >= insertion_steps_));
-    if (!rigid_) dem_.setNodePositions(tool_.name, deformedPositions(integrator_->displacement()));
+    dem().setRigidMotion(tool_.name, motion(s.step >= insertion_steps_));
+    if (!rigid_) dem().setNodePositions(tool_.name, deformedPositions(integrator_->displacement()));
     return s;
   }
 
-  const study::Study& study_;
+  study::Study study_;
   const study::Tool& tool_;
-  adapter::CouplingApi& dem_;
+  adapter::CouplingApi* dem_ = nullptr;
   CoupledRunOptions options_;
   double dt_;
   bool rigid_ = false;
@@ -433,10 +442,11 @@ class CoupledRun {
   std::unique_ptr<StagedFile> csv_, displacements_;
 };
 
-}  // namespace
+CoupledDriver::CoupledDriver(const study::Study& study, CoupledRunOptions options)
+    : impl_(std::make_unique<Impl>(study, std::move(options))) {}
 
-CoupledRunSummary runCoupled(const study::Study& study, adapter::CouplingApi& dem, const CoupledRunOptions& options) {
-  return CoupledRun(study, dem, options).run();
-}
+CoupledDriver::~CoupledDriver() = default;
+
+CoupledRunSummary CoupledDriver::run(adapter::CouplingApi& dem) { return impl_->run(dem); }
 
 }  // namespace demfem::fem

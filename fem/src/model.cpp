@@ -2,6 +2,7 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <Spectra/MatOp/DenseSymMatProd.h>
 #include <Spectra/MatOp/SparseSymMatProd.h>
 #include <Spectra/MatOp/SymShiftInvert.h>
@@ -374,7 +375,9 @@ ReducedModel reduce(const FullModel& model) {
   const SparseMatrix K_ba = extract(model.K, b_dofs, a_dofs);
   const SparseMatrix M_bb = extract(model.M, b_dofs, b_dofs);
   const SparseMatrix M_ba = extract(model.M, b_dofs, a_dofs);
-  Eigen::CholmodSupernodalLLT<SparseMatrix> K_bb_factor(K_bb);  // factorized once
+  // CHOLMOD's simplicial factor: on these banded K_bb it beats the supernodal one, whose dense
+  // kernels go through the system BLAS.
+  Eigen::CholmodSimplicialLLT<SparseMatrix> K_bb_factor(K_bb);  // factorized once
   if (K_bb_factor.info() != Eigen::Success)
     throw std::runtime_error("keypoint reduction: K_bb (the " + std::to_string(b_dofs.size()) +
                              " non-keypoint DOFs) is not positive definite: the condensed nodes form a mechanism");
@@ -382,9 +385,16 @@ ReducedModel reduce(const FullModel& model) {
   const Eigen::MatrixXd T_b = -K_bb_factor.solve(Eigen::MatrixXd(K_ba));
   // Eq (15): K_r = K_aa - K_ab K_bb^-1 K_ba = K_aa + K_ba^T T_b.
   r.K = K_aa + K_ba.transpose() * T_b;
-  // M_r = T^T M T = M_aa + M_ab T_b + T_b^T M_ba + T_b^T M_bb T_b.
+  // M_r = T^T M T = M_aa + M_ab T_b + T_b^T M_ba + T_b^T M_bb T_b. The last term, the only dense
+  // product, as Z^T Z with Z = L^T P T_b (M_bb = P^T L L^T P): a symmetric rank-k update, half a GEMM.
   const Eigen::MatrixXd M_ab_T = M_ba.transpose() * T_b;
-  r.M = M_aa + M_ab_T + M_ab_T.transpose() + T_b.transpose() * (M_bb * T_b);
+  Eigen::SimplicialLLT<SparseMatrix> M_bb_factor(M_bb);
+  if (M_bb_factor.info() != Eigen::Success) throw std::runtime_error("keypoint reduction: M_bb is not positive definite");
+  const Eigen::MatrixXd Z = M_bb_factor.matrixU() * (M_bb_factor.permutationP() * T_b);
+  Eigen::MatrixXd TMT = Eigen::MatrixXd::Zero(T_b.cols(), T_b.cols());
+  TMT.selfadjointView<Eigen::Lower>().rankUpdate(Z.transpose());
+  r.M = M_aa + M_ab_T + M_ab_T.transpose();
+  r.M += TMT.selfadjointView<Eigen::Lower>();
   // Symmetric up to round-off; make it exact so Cholesky and Lanczos see a symmetric matrix.
   r.K = 0.5 * (r.K + r.K.transpose()).eval();
   r.M = 0.5 * (r.M + r.M.transpose()).eval();
