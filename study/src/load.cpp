@@ -699,19 +699,20 @@ class StudyParser {
       if (!cone && source.constraints_ok && m.depth_m >= length - c.clamp_length_m)
         issues_.add(mpath + "/depth_mm", "must be < the tool length minus the clamp (" +
                                              mm(length - c.clamp_length_m) + "), got " + mm(m.depth_m));
-      // Footprint in the bin (x across, z along): half sizes about the tool's local origin.
+      // Footprint in the bin (x across, z along). start_z is the front face of a plate (its back face
+      // trails by the thickness) and the axis of a cone.
       const double half_x = cone ? std::sqrt(g.cone_area_m2 / std::numbers::pi) : g.width_m / 2;
-      const double half_z = cone ? half_x : (g.kind == GeometryKind::Plate ? g.thickness_m / 2 : 0.0);
-      const double travel = cone ? 0.0 : m.stroke_m;
+      const double behind = cone ? half_x : (g.kind == GeometryKind::Plate ? g.thickness_m : 0.0);
+      const double ahead = cone ? half_x : m.stroke_m;
       if (g.kind == GeometryKind::Plate || cone) {
         if (m.center_x_m - half_x < 0 || m.center_x_m + half_x > s.bin_width_m)
           issues_.add(mpath + (center_x_given_[i] ? "/center_x_mm" : ""),
                       "the tool (x from " + mm(m.center_x_m - half_x) + " to " + mm(m.center_x_m + half_x) +
                           ") must lie within the bin width (0 to " + mm(s.bin_width_m) + ")");
       }
-      if (m.start_z_m - half_z < 0 || m.start_z_m + half_z + travel > s.bin_length_m)
-        issues_.add(mpath + "/start_z_mm", "the tool's path (z from " + mm(m.start_z_m - half_z) + " to " +
-                                               mm(m.start_z_m + half_z + travel) +
+      if (m.start_z_m - behind < 0 || m.start_z_m + ahead > s.bin_length_m)
+        issues_.add(mpath + "/start_z_mm", "the tool's path (z from " + mm(m.start_z_m - behind) + " to " +
+                                               mm(m.start_z_m + ahead) +
                                                ") must lie within the bin length (0 to " + mm(s.bin_length_m) + ")");
     }
     // Cones move side by side; their footprints must not overlap.

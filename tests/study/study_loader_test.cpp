@@ -245,8 +245,11 @@ TEST_CASE("constraints lie on the free part of the tool and the depth fits the s
   doc["tools"][0]["constraints"]["sensor_from_top_mm"] = 195;
   requireSingleIssue(doc, "/tools/0/motion/depth_mm", "must be < the tool length minus the clamp (10 mm)");
   doc = quick();
-  doc["tools"][0]["motion"]["stroke_mm"] = 200;  // 80 + 2 + 200 > 250 mm bin
-  requireSingleIssue(doc, "/tools/0/motion/start_z_mm", "the tool's path (z from 78 mm to 282 mm)");
+  doc["tools"][0]["motion"]["stroke_mm"] = 200;  // front face 80 mm + 200 mm > 250 mm bin
+  requireSingleIssue(doc, "/tools/0/motion/start_z_mm", "the tool's path (z from 76 mm to 280 mm)");
+  doc = quick();
+  doc["tools"][0]["motion"]["start_z_mm"] = 3;  // the 4 mm plate's back face would be outside
+  requireSingleIssue(doc, "/tools/0/motion/start_z_mm", "the tool's path (z from -1 mm to 53 mm)");
 }
 
 TEST_CASE("particle sizes are ordered", "[study]") {

@@ -159,9 +159,11 @@ struct ToolMotion {
   double depth_m = 0.018;
   double velocity_m_s = 0.03119;
   double stroke_m = 0.600;
-  double start_z_m = 0.0;          // bin z of the tool's local origin at the start of the stroke
+  // Bin z of the tool's front (soil-engaging) face, local z = +T/2, at the start of the stroke; for a
+  // cone, of its axis.
+  double start_z_m = 0.0;
   double insertion_velocity_m_s = 0.05; // vertical insertion before the stroke
-  double center_x_m = 0.125;       // bin x of the tool's local origin (file default: bin centre line)
+  double center_x_m = 0.125;       // bin x of the tool's width centre / cone axis (file default: bin centre)
   bool operator==(const ToolMotion&) const = default;
 };
 
