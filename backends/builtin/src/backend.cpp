@@ -44,13 +44,16 @@ class BuiltinBackend final : public adapter::CouplingApi {
       mesh.material = sim_.materials().index(tool.dem_material);
       const int m = sim_.addMesh(std::move(mesh));
       meshes_[tool.name] = m;
-      // Tip above the surface at the start of the stroke, front face (local z = +T/2) at start_z.
+      // Centred across the bin, tip above the surface, front face (local z = +T/2) at start_z.
       sim_.setMeshMotion(m,
-                         {0, study.soil.fill_height_m + kInsertionClearance_m,
+                         {study.soil.bin_width_m / 2, study.soil.fill_height_m + kInsertionClearance_m,
                           tool.motion.start_z_m - tool.geometry.thickness_m / 2},
                          {0, 0, 0}, 0);
     }
-    sim_.setTimeStep(studyTimeStep(sim_, study.dem));
+    // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
+    double dt = studyTimeStep(sim_, study.dem);
+    if (study.fem.dt_s > 0) dt = study.fem.dt_s / std::ceil(study.fem.dt_s / dt - 1e-9);
+    sim_.setTimeStep(dt);
     insertTools();
     if (study.output.vtk_every > 0) {
       vtk_interval_ = study.output.vtk_every * study.fem.dt_s;

@@ -44,18 +44,19 @@ MaterialTable MaterialTable::fromSoil(const study::Soil& soil) {
       const study::Interaction* found = nullptr;
       for (const auto& in : soil.interactions)
         if ((in.a == ma.name && in.b == mb.name) || (in.a == mb.name && in.b == ma.name)) found = &in;
-      if (!found)
-        throw std::invalid_argument("builtin DEM: /soil/interactions has no entry for the pair '" + ma.name + "' - '" +
-                                    mb.name + "'");
+      if (!found) continue;  // wall-wall pairs need none; DemSimulation::requirePair() checks use
       if (!(found->restitution > 0 && found->restitution <= 1))
         throw std::invalid_argument("builtin DEM: /soil/interactions '" + ma.name + "' - '" + mb.name +
                                     "': restitution must be in (0, 1], got " + std::to_string(found->restitution));
       PairLaw& law = t.laws[a * n + b];
+      law.defined = true;
       law.restitution = found->restitution;
       law.friction = found->static_friction;
       law.rolling_friction = found->rolling_friction;
       law.cohesion_J_m3 = found->cohesion_J_m3;
-      law.yield_min_Pa = std::min(ma.yield_Pa, mb.yield_Pa);
+      // yield_Pa = 0 means "not limiting" (walls): K1 uses the other material's yield strength.
+      law.yield_min_Pa = ma.yield_Pa > 0 && mb.yield_Pa > 0 ? std::min(ma.yield_Pa, mb.yield_Pa)
+                                                             : std::max(ma.yield_Pa, mb.yield_Pa);
       law.youngs_eff_Pa = 1.0 / ((1 - ma.poisson * ma.poisson) / ma.youngs_Pa + (1 - mb.poisson * mb.poisson) / mb.youngs_Pa);
       law.log_restitution = std::log(std::min(found->restitution, 1.0 - 1e-12));
     }
@@ -71,11 +72,7 @@ DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int 
       layout_(HistoryLayout::of(soil.contact)),
       domain_(domain),
       threads_(std::max(1, threads)) {
-  if (model_.normal == study::NormalModel::EdemHysteretic)
-    for (const auto& m : table_.materials)
-      if (!(m.yield_Pa > 0))
-        throw std::invalid_argument("builtin DEM: material '" + m.name +
-                                    "' needs yield_Pa > 0 for the EDEM hysteretic spring (K1 = 5 R* min(Y))");
+  used_.assign(table_.materials.size(), 0);
   if (model_.normal != study::NormalModel::EdemHysteretic)
     for (const auto& m : table_.materials)
       if (!(m.youngs_Pa > 0) || !(m.poisson >= 0 && m.poisson < 0.5))
@@ -90,10 +87,27 @@ DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int 
   }
 }
 
+void DemSimulation::useMaterial(int material, bool particle) {
+  if (material < 0 || material >= static_cast<int>(table_.materials.size()))
+    throw std::invalid_argument("builtin DEM: material index " + std::to_string(material) + " out of range");
+  if (particle && model_.normal == study::NormalModel::EdemHysteretic && !(table_.materials[material].yield_Pa > 0))
+    throw std::invalid_argument("builtin DEM: particle material '" + table_.materials[material].name +
+                                "' needs yield_Pa > 0 for the EDEM hysteretic spring (K1 = 5 R* min(Y))");
+  const std::uint8_t flag = particle ? 2 : 1;
+  if (used_[material] & flag) return;
+  used_[material] |= flag;
+  // Every particle material meets every used material (particles and walls).
+  for (std::size_t other = 0; other < used_.size(); ++other) {
+    if (!used_[other] || (!particle && !(used_[other] & 2))) continue;
+    if (!table_.law(material, static_cast<int>(other)).defined)
+      throw std::invalid_argument("builtin DEM: /soil/interactions has no entry for the pair '" +
+                                  table_.materials[material].name + "' - '" + table_.materials[other].name + "'");
+  }
+}
+
 int DemSimulation::addParticle(const ParticleState& p) {
   if (!(p.radius > 0)) throw std::invalid_argument("builtin DEM: particle radius must be > 0");
-  if (p.material < 0 || p.material >= static_cast<int>(table_.materials.size()))
-    throw std::invalid_argument("builtin DEM: particle material index out of range");
+  useMaterial(p.material, true);
   const double rho = table_.materials[p.material].density_kg_m3;
   const double m = rho * 4.0 / 3.0 * kPi * p.radius * p.radius * p.radius;
   for (int c = 0; c < 3; ++c) {
@@ -115,6 +129,7 @@ int DemSimulation::addParticle(const ParticleState& p) {
 }
 
 void DemSimulation::setParticleMaterial(int i, int material, int layer) {
+  useMaterial(material, true);
   const double r = radius_[i];
   const double m = table_.materials.at(material).density_kg_m3 * 4.0 / 3.0 * kPi * r * r * r;
   material_[i] = material;
@@ -159,6 +174,7 @@ void DemSimulation::keepParticles(const std::vector<char>& keep) {
 
 int DemSimulation::addPlane(const PlaneWall& wall) {
   if (!wall_contacts_.empty()) throw std::logic_error("builtin DEM: walls must be added before contacts exist");
+  useMaterial(wall.material, false);
   PlaneWall p = wall;
   const double len = std::sqrt(p.normal[0] * p.normal[0] + p.normal[1] * p.normal[1] + p.normal[2] * p.normal[2]);
   if (!(len > 0)) throw std::invalid_argument("builtin DEM: plane normal is zero");
@@ -171,6 +187,7 @@ int DemSimulation::addPlane(const PlaneWall& wall) {
 int DemSimulation::addMesh(TriangleMesh mesh) {
   if (mesh.nodes.size() != mesh.rest_nodes.size()) mesh.nodes = mesh.rest_nodes;
   mesh.deformation_velocity.assign(mesh.nodes.size(), Vec3{0, 0, 0});
+  useMaterial(mesh.material, false);
   for (const auto& t : mesh.triangles)
     for (auto id : t)
       if (id < 0 || static_cast<std::size_t>(id) >= mesh.nodes.size())
@@ -258,6 +275,7 @@ double DemSimulation::stabilityLimit() const {
     if (!std::isfinite(rmin[a])) continue;
     const double ma = mass(a, rmin[a]);
     for (std::size_t b = 0; b < nm; ++b) {
+      if (!used_[b]) continue;
       const PairLaw& law = table_.law(static_cast<int>(a), static_cast<int>(b));
       // wall contact (b as wall material)
       const auto sw = contactStiffness(model_, law, rmin[a], ma);
@@ -992,6 +1010,7 @@ void DemSimulation::saveState(std::ostream& out) const {
   for (const auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_, &radius_, &mass_, &inv_mass_, &inv_inertia_}) putVec(out, *a);
   putVec(out, material_);
   putVec(out, layer_);
+  putVec(out, used_);
   putVec(out, nb_start_);
   putVec(out, nb_j_);
   putVec(out, nb_stiff_);
@@ -1050,6 +1069,7 @@ void DemSimulation::loadState(std::istream& in) {
   for (auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_, &radius_, &mass_, &inv_mass_, &inv_inertia_}) getVec(in, *a);
   getVec(in, material_);
   getVec(in, layer_);
+  getVec(in, used_);
   getVec(in, nb_start_);
   getVec(in, nb_j_);
   getVec(in, nb_stiff_);

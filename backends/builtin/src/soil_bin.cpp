@@ -24,15 +24,14 @@ Domain binDomain(const study::Soil& soil) {
   const double margin = 2 * soil.diameter_max_m;
   // Room above the fill: the loose insertion lattice of a stage and the tools (up to 0.3 m).
   const double top = std::max(3.0 * soil.fill_height_m, soil.fill_height_m + 0.3);
-  return Domain{{-soil.bin_width_m / 2 - margin, -margin, -margin},
-                {soil.bin_width_m / 2 + margin, top, soil.bin_length_m + margin}};
+  return Domain{{-margin, -margin, -margin}, {soil.bin_width_m + margin, top, soil.bin_length_m + margin}};
 }
 
 void addBinWalls(DemSimulation& sim, const study::Soil& soil) {
   const int mat = sim.materials().index(soil.bin_material);
-  const double w = soil.bin_width_m / 2, l = soil.bin_length_m;
+  const double w = soil.bin_width_m, l = soil.bin_length_m;
   sim.addPlane({{0, 0, 0}, {0, 1, 0}, mat});
-  sim.addPlane({{-w, 0, 0}, {1, 0, 0}, mat});
+  sim.addPlane({{0, 0, 0}, {1, 0, 0}, mat});
   sim.addPlane({{w, 0, 0}, {-1, 0, 0}, mat});
   sim.addPlane({{0, 0, 0}, {0, 0, 1}, mat});
   sim.addPlane({{0, 0, l}, {0, 0, -1}, mat});
@@ -91,7 +90,7 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
       const double jitter = 0.5 * (spacing - soil.diameter_max_m);
       ParticleState p;
       p.radius = rmin + (rmax - rmin) * unit(rng);
-      p.x = {-w / 2 + spacing / 2 + spacing * static_cast<double>(in_level % nx) + jitter * (2 * unit(rng) - 1),
+      p.x = {spacing / 2 + spacing * static_cast<double>(in_level % nx) + jitter * (2 * unit(rng) - 1),
              y0 + spacing * static_cast<double>(level) + jitter * (2 * unit(rng) - 1),
              spacing / 2 + spacing * static_cast<double>(in_level / nx) + jitter * (2 * unit(rng) - 1)};
       p.material = deposit_material;

@@ -13,7 +13,7 @@
 //
 // Formulas and sources
 // - EDEM hysteretic spring (Walton & Braun 1986, as EDEM documents it): loading stiffness
-//   K1 = 5 R* min(Y_i, Y_j), unloading K2 = K1 / e^2, Fn = max(0, min(K1 delta, K2 (delta - delta0))),
+//   K1 = 5 R* min(Y_i, Y_j) (a yield strength of 0 means "not limiting": walls use the particle's), unloading K2 = K1 / e^2, Fn = max(0, min(K1 delta, K2 (delta - delta0))),
 //   delta0 = delta_max (1 - K1/K2). Dissipation is the hysteresis alone (restitution = e exactly);
 //   documented assumption: the Table 2 "damping factor" D_n acts on the tangential spring only,
 //   c_t = 2 D_n sqrt(m* k_t), and the "stiffness factor" gives k_t = stiffness_factor * K1.
@@ -53,6 +53,7 @@ namespace demfem::builtin {
 
 // Coefficients of one material pair, resolved once from the study (interaction table + materials).
 struct PairLaw {
+  bool defined = false;       // the study has an interaction for this pair
   double restitution = 0.5;
   double friction = 0.5;
   double rolling_friction = 0;

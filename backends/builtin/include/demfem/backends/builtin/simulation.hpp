@@ -49,8 +49,9 @@ struct MaterialTable {
   std::vector<PairLaw> laws;  // materials.size()^2, symmetric
   int index(const std::string& name) const;  // throws std::invalid_argument naming the material
   const PairLaw& law(int a, int b) const { return laws[static_cast<std::size_t>(a) * materials.size() + b]; }
-  // Every pair of materials needs an Interaction; throws std::invalid_argument naming a missing pair
-  // or a restitution outside (0, 1].
+  // Pairs without an Interaction stay undefined (wall-wall pairs need none; the simulation refuses a
+  // particle or wall whose pairs with the materials in use are missing). Throws
+  // std::invalid_argument for a restitution outside (0, 1].
   static MaterialTable fromSoil(const study::Soil& soil);
 };
 
@@ -158,6 +159,8 @@ class DemSimulation {
   void computeForces();
   void checkHealth();
   ContactStiffness wallStiffness(int i, int wall_material) const;
+  // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
+  void useMaterial(int material, bool particle);
   [[noreturn]] void fail(std::size_t particle, const std::string& what) const;
 
   MaterialTable table_;
@@ -175,6 +178,7 @@ class DemSimulation {
   std::vector<double> x_, v_, w_, f_, t_, x_build_;
   std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
   std::vector<std::int32_t> material_, layer_;
+  std::vector<std::uint8_t> used_;  // per material: 1 wall, 2 particle
 
   // half neighbour list (CSR) with per-slot stiffness and history
   std::vector<std::int32_t> nb_start_, nb_j_;

@@ -3,8 +3,8 @@
 // on the same soil (DESIGN.md section 5).
 //
 // Contract
-// - Bin frame (DESIGN.md section 10), metres: x in [-W/2, W/2], y up from the floor y = 0, z in
-//   [0, L]. Walls are planes (floor and four sides, open top) of the study's bin material.
+// - Bin frame (DESIGN.md section 10, study.hpp), metres: origin at a bottom corner, x in [0, W],
+//   y up from the floor y = 0, z in [0, L]. Walls are planes (floor and four sides, open top) of the study's bin material.
 // - Deposition: particles (diameters uniform in [d_min, d_max], seed soil.deposition_seed) are
 //   rained in four stages from the bottom up, one per layer thickness of the study (the paper
 //   deposits the upper 30 mm in 10 mm layers), each stage settling under gravity until the total

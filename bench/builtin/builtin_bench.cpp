@@ -1,0 +1,164 @@
+// builtin_bench: speed of the built-in DEM on a settled soil bin with a plate tool dragged through it
+// (issue: built-in DEM backend; the bar is LIGGGHTS 3.8 on the same case: about 6 M particle-steps/s
+// on 1 core and 11.5 M on 2 ranks with hooke + tangential history + cdt, 4.9 M with
+// hooke/hysteresis + sjkr + epsd).
+//
+// The study's soil is deposited once (cached as soil-<hash>.bin in the soil directory, with the DEM
+// step from the stiffest-spring criterion at a fraction of 0.1 so that deposition stays affordable),
+// the tool is inserted to its depth once with the study's contact model, and then every model and
+// thread count is timed over the same number of drag steps from that state. Prints a table;
+// --json FILE writes the figures (units in the keys).
+#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/backends/builtin/simulation.hpp"
+#include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/cli/cli_support.hpp"
+#include "demfem/study/study.hpp"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+using namespace demfem;
+using namespace demfem::builtin;
+
+namespace {
+
+struct ModelCase {
+  std::string label;
+  study::ContactModel model;
+};
+
+TriangleMesh plateMesh(const study::Tool& tool, int material) {
+  const auto s = adapter::makePlateSurface(tool.geometry.length_m, tool.geometry.width_m, tool.geometry.thickness_m,
+                                           tool.geometry.keypoint_spacing_m);
+  TriangleMesh mesh;
+  mesh.name = tool.name;
+  for (const auto& n : s.nodes) mesh.rest_nodes.push_back({n[0], n[1], n[2]});
+  mesh.nodes = mesh.rest_nodes;
+  mesh.triangles = s.triangles;
+  mesh.material = material;
+  return mesh;
+}
+
+// The bin with the settled particles (states given) and the tool at depth moving at its velocity.
+DemSimulation makeBin(const study::Study& st, const study::ContactModel& model, const std::vector<ParticleState>& particles,
+                      int threads, Vec3 tool_origin) {
+  study::Soil soil = st.soil;
+  soil.contact = model;
+  DemSimulation sim(soil, binDomain(soil), threads);
+  addBinWalls(sim, soil);
+  for (const auto& p : particles) sim.addParticle(p);
+  const auto& tool = st.tools.at(0);
+  const int m = sim.addMesh(plateMesh(tool, sim.materials().index(tool.dem_material)));
+  sim.setMeshMotion(m, tool_origin, {0, 0, tool.motion.velocity_m_s}, 0);
+  return sim;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"builtin_bench: particle-steps per second of the built-in DEM on a settled bin with a moving tool"};
+  std::string study_file = "studies/s235_dem_18.json";
+  std::string soil_dir;
+  long steps = 2000;
+  std::vector<int> thread_counts{1, 2};
+  app.add_option("--study", study_file, "Study with the bin, soil and tool (default studies/s235_dem_18.json)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--soil-dir", soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
+  app.add_option("--steps", steps, "Timed drag steps per case")->check(CLI::PositiveNumber);
+  app.add_option("--threads", thread_counts, "Thread counts to time");
+  std::string& json_target = cli::addJsonOption(app);
+  app.callback([&] {
+    study::Study st = study::loadStudy(study_file);
+    if (st.tools.empty()) throw cli::InputError(study_file + ": the benchmark needs a tool");
+    // Deposition at the stiffest-spring step (documented above), cached by the soil hash.
+    st.dem.dt_s.reset();
+    st.dem.criterion = study::TimeStepCriterion::StiffestSpring;
+    st.dem.dt_fraction = 0.1;
+    const auto file = soilFile(st, soil_dir.empty() ? defaultSoilDirectory() : std::filesystem::path(soil_dir));
+    SettledSoil settled;
+    if (std::filesystem::exists(file)) {
+      settled = readSettledSoil(file);
+    } else {
+      std::cerr << "depositing " << file.string() << " (once)\n";
+      DepositReport r;
+      settled = depositSoil(st, 2, r, [](const std::string& line) { std::cerr << line << '\n'; });
+      writeSettledSoil(file, settled);
+    }
+
+    // Insert the tool once with the study's model (untimed), keep the particle states.
+    const auto& tool = st.tools[0];
+    std::vector<ParticleState> states;
+    Vec3 origin;
+    {
+      DemSimulation sim(st.soil, binDomain(st.soil), 2);
+      addBinWalls(sim, st.soil);
+      addSettledParticles(sim, st.soil, settled);
+      const double travel = 0.005 + tool.motion.depth_m;
+      const int m = sim.addMesh(plateMesh(tool, sim.materials().index(tool.dem_material)));
+      sim.setMeshMotion(m, {st.soil.bin_width_m / 2, st.soil.fill_height_m + 0.005, tool.motion.start_z_m - tool.geometry.thickness_m / 2},
+                        {0, -tool.motion.insertion_velocity_m_s, 0}, 0);
+      sim.setTimeStep(studyTimeStep(sim, st.dem));
+      sim.run(std::lround(travel / tool.motion.insertion_velocity_m_s / sim.timeStep()));
+      for (std::size_t i = 0; i < sim.particleCount(); ++i) states.push_back(sim.particle(i));
+      origin = sim.mesh(m).offset(sim.time());
+    }
+
+    study::ContactModel edem = st.soil.contact;
+    edem.normal = study::NormalModel::EdemHysteretic;
+    edem.cohesion = study::CohesionModel::EdemLinear;
+    edem.rolling = study::RollingModel::EdemStandard;
+    study::ContactModel hooke = st.soil.contact;
+    hooke.normal = study::NormalModel::Hooke;
+    hooke.cohesion = study::CohesionModel::None;
+    hooke.rolling = study::RollingModel::Cdt;
+    hooke.tangential_history = true;
+    study::ContactModel luding = hooke;
+    luding.normal = study::NormalModel::HookeHysteresis;
+    luding.cohesion = study::CohesionModel::Sjkr;
+    luding.rolling = study::RollingModel::Epsd;
+    const std::vector<ModelCase> cases{{"hysteretic+linear-cohesion+edem-rolling", edem},
+                                       {"hooke+history+cdt", hooke},
+                                       {"hooke/hysteresis+sjkr+epsd", luding}};
+
+    nlohmann::json report{{"study", study_file}, {"particles", states.size()}, {"steps", steps}, {"cases", nlohmann::json::array()}};
+    const bool text = json_target != "-";
+    if (text)
+      std::printf("%zu particles, tool at %.0f mm depth moving at %.2f mm/s, %ld steps per case\n\n", states.size(),
+                  tool.motion.depth_m * 1e3, tool.motion.velocity_m_s * 1e3, steps);
+    if (text)
+      std::printf("%-42s %7s %11s %9s %16s %10s %9s\n", "model", "threads", "dt_s", "wall_s", "particle_steps/s",
+                  "bytes/part", "contacts");
+    for (const auto& c : cases) {
+      for (const int threads : thread_counts) {
+        DemSimulation sim = makeBin(st, c.model, states, threads, origin);
+        // Each model at a tenth of its own stiffest-spring critical step.
+        sim.setTimeStep(0.1 * sim.criticalTimeStep(study::TimeStepCriterion::StiffestSpring));
+        sim.run(10);  // lists and first forces outside the timing
+        const auto t0 = std::chrono::steady_clock::now();
+        sim.run(steps);
+        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / wall;
+        if (text)
+          std::printf("%-42s %7d %11.3e %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), threads, sim.timeStep(), wall, rate,
+                      sim.bytesPerParticle(), sim.contactCount());
+        report["cases"].push_back({{"model", c.label},
+                                   {"threads", threads},
+                                   {"dt_s", sim.timeStep()},
+                                   {"wall_s", wall},
+                                   {"particle_steps_per_s", rate},
+                                   {"bytes_per_particle", sim.bytesPerParticle()},
+                                   {"contacts", sim.contactCount()}});
+      }
+    }
+    cli::writeJson(json_target, report);
+  });
+  return cli::runApp(app, argc, argv);
+}

@@ -1,0 +1,141 @@
+// The builtin backend through the coupling API on a small deposited bin with a plate tool.
+#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/backends/builtin/backend.hpp"
+#include "demfem/backends/builtin/soil_bin.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+using namespace demfem;
+
+namespace {
+
+// A 120 x 120 mm bin with 40 mm of soil (two layers), a 40 x 100 x 4 mm plate at 10 mm depth.
+study::Study smallStudy() {
+  study::Study s;
+  s.name = "builtin-small";
+  s.kind = study::StudyKind::Coupled;
+  auto& soil = s.soil;
+  soil.bin_length_m = 0.12;
+  soil.bin_width_m = 0.12;
+  soil.fill_height_m = 0.04;
+  soil.materials = {{"top", 2600, 1.12e10, 0.3, 5.88e5}, {"deep", 2600, 1.12e10, 0.3, 5.88e5}, {"steel", 7933, 7.9e10, 0.3, 0}};
+  soil.bin_material = "steel";
+  soil.layers = {{"top", 0, 0.01}, {"deep", 0.01, 0.04}};
+  for (const auto& [a, b] : {std::pair{"top", "top"}, {"top", "deep"}, {"deep", "deep"}})
+    soil.interactions.push_back({a, b, 0.6, 0.3, 0.1, 3e4});
+  for (const char* m : {"top", "deep"}) soil.interactions.push_back({m, "steel", 0.6, 0.3, 0.1, 0});
+  soil.settle_kinetic_energy_J = 1e-5;
+  study::Tool tool;
+  tool.dem_material = "steel";
+  tool.geometry.length_m = 0.1;
+  tool.geometry.width_m = 0.04;
+  tool.geometry.thickness_m = 0.004;
+  tool.motion.depth_m = 0.01;
+  tool.motion.velocity_m_s = 0.036;
+  tool.motion.start_z_m = 0.03;
+  tool.motion.insertion_velocity_m_s = 0.05;
+  s.tools = {tool};
+  s.fem.dt_s = 0.001;
+  s.dem.criterion = study::TimeStepCriterion::StiffestSpring;
+  s.dem.dt_fraction = 0.1;
+  s.dem.threads = 1;
+  return s;
+}
+
+struct SoilDirectory {
+  std::filesystem::path dir = std::filesystem::temp_directory_path() / "demfem-builtin-backend-test";
+  SoilDirectory() {
+    std::filesystem::create_directories(dir);
+    ::setenv("DEMFEM_SOIL_DIR", dir.c_str(), 1);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("builtin backend deposits a layered soil once and serves the coupling calls", "[builtin]") {
+  const SoilDirectory soil_dir;
+  const study::Study st = smallStudy();
+  auto api = builtin::makeBackend(st);
+  const auto soil_file = builtin::soilFile(st, soil_dir.dir);
+  REQUIRE(std::filesystem::exists(soil_file));
+
+  SECTION("settled soil: layers by depth, surface at the fill height") {
+    const auto soil = builtin::readSettledSoil(soil_file);
+    CHECK(soil.particles.size() > 300);
+    for (const auto& p : soil.particles) {
+      CHECK(p.x[1] <= st.soil.fill_height_m);
+      CHECK(p.layer == (st.soil.fill_height_m - p.x[1] < 0.01 ? 0 : 1));
+    }
+  }
+
+  SECTION("geometry and node positions are the plate's keypoints") {
+    const auto plate = adapter::makePlateSurface(0.1, 0.04, 0.004, 0.005);
+    const auto geos = api->geometries();
+    REQUIRE(geos.size() == 1);
+    CHECK(geos[0].name == "tool");
+    CHECK(geos[0].node_count == static_cast<std::int32_t>(plate.nodes.size()));
+    CHECK(geos[0].triangles == plate.triangles);
+    const auto xyz = api->nodePositions("tool");
+    for (std::size_t k = 0; k < plate.nodes.size(); ++k)
+      for (int c = 0; c < 3; ++c) CHECK(xyz[3 * k + c] == plate.nodes[k][c]);
+    // Inserted to depth: tip 10 mm below the fill surface, centred, moving in +z.
+    const auto motion = api->rigidMotion("tool");
+    CHECK(motion.origin_m[1] == Approx(st.soil.fill_height_m - 0.01).margin(1e-12));
+    CHECK(motion.velocity_m_s[2] == 0.036);
+  }
+
+  SECTION("drag: the soil pushes the tool back; interval mean is the impulse over the interval") {
+    const double t0 = api->time();
+    for (int k = 0; k < 20; ++k) api->simulate(0.001);
+    CHECK(api->time() - t0 == Approx(0.02).epsilon(1e-9));  // the DEM step divides the FEM step
+    const auto mean = api->nodeForces("tool");
+    const auto now = api->nodeForces("tool", adapter::ForceMode::Instantaneous);
+    double fz = 0, fz_now = 0;
+    for (std::size_t k = 0; k < mean.size() / 3; ++k) {
+      fz += mean[3 * k + 2];
+      fz_now += now[3 * k + 2];
+    }
+    CHECK(fz < 0);  // resisting the +z motion
+    CHECK(std::isfinite(fz_now));
+  }
+
+  SECTION("deformation keeps the run going; checkpoint and restore continue bit-identically") {
+    auto xyz = api->nodePositions("tool");
+    for (std::size_t k = 0; k < xyz.size() / 3; ++k) xyz[3 * k + 2] += 1e-4 * (0.1 - xyz[3 * k + 1]) / 0.1;  // tip bent back
+    api->setNodePositions("tool", xyz);
+    api->simulate(0.002);
+    const auto file = soil_dir.dir / "checkpoint.bin";
+    api->checkpoint(file);
+    api->simulate(0.003);
+    const auto a = api->nodeForces("tool", adapter::ForceMode::Instantaneous);
+    const double ta = api->time();
+    api->restore(file);
+    api->simulate(0.003);
+    const auto b = api->nodeForces("tool", adapter::ForceMode::Instantaneous);
+    CHECK(api->time() == ta);
+    REQUIRE(a.size() == b.size());
+    CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+  }
+
+  SECTION("errors carry codes") {
+    try {
+      api->nodeForces("plough");
+      FAIL("no error for an unknown geometry");
+    } catch (const adapter::CouplingError& e) {
+      CHECK(e.code() == adapter::ErrorCode::UnknownGeometry);
+    }
+    try {
+      api->setNodePositions("tool", adapter::NodeArray(5, 0.0));
+      FAIL("no error for a wrong size");
+    } catch (const adapter::CouplingError& e) {
+      CHECK(e.code() == adapter::ErrorCode::SizeMismatch);
+    }
+    api->shutdown();
+    CHECK_THROWS_AS(api->simulate(0.001), adapter::CouplingError);
+  }
+}
