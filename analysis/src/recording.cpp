@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -135,6 +136,7 @@ Table readTable(const fs::path& path) {
   std::size_t line_number = 0;
   while (std::getline(in, raw)) {
     ++line_number;
+    if (line_number == 1 && raw.rfind("\xEF\xBB\xBF", 0) == 0) raw.erase(0, 3);  // UTF-8 byte order mark
     const std::string line = trim(raw);
     if (line.empty()) continue;
     if (line.front() == '#') {
@@ -212,10 +214,6 @@ std::string CaseKey::title() const {
   return out.str();
 }
 
-std::string Recording::where(std::size_t sample) const {
-  return csv_path.string() + ":" + std::to_string(sample < line.size() ? line[sample] : 0);
-}
-
 Recording readRecording(const fs::path& csv_path) {
   Recording rec;
   rec.csv_path = csv_path;
@@ -261,6 +259,11 @@ Recording readRecording(const fs::path& csv_path) {
              {"displacement_mm", soil_bin, &rec.displacement_mm}, {"tilt_deg", false, &rec.tilt_deg}};
     rec.repeat = sidecar.repeat(1);
     if (!sidecar.flag("complete", true)) sidecar.fail("complete", "the run is marked incomplete (complete: false)");
+    for (const char* factor : {"force_factor", "deformation_factor"})
+      if (sidecar.has(factor))
+        sidecar.fail(factor, "given, but " + csv_path.string() + " is already calibrated (column 't_s', N and mm): factors apply to raw " +
+                                 "recordings (column 't') only");
+    if (sidecar.has("sample_rate_hz")) rec.sample_rate_hz = sidecar.positive("sample_rate_hz");
   }
 
   std::vector<std::size_t> column_index;
@@ -285,14 +288,14 @@ Recording readRecording(const fs::path& csv_path) {
                        specs[0].name + "': time " + formatNumber(rec.time_s[i]) + " s does not increase (previous row, line " +
                        std::to_string(rec.line[i - 1]) + ", has " + formatNumber(rec.time_s[i - 1]) + " s)");
   }
-  if (rec.format == RecordingFormat::Raw) {
+  if (rec.sample_rate_hz > 0.0) {
     std::vector<double> steps(rec.size() - 1);
     for (std::size_t i = 1; i < rec.size(); ++i) steps[i - 1] = rec.time_s[i] - rec.time_s[i - 1];
     std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
     const double median_step = steps[steps.size() / 2];
     const double expected_step = 1.0 / rec.sample_rate_hz;
     if (std::abs(median_step - expected_step) > 0.02 * expected_step)
-      sidecar.fail("sample_rate_hz", "does not match the recording: " + formatNumber(rec.sample_rate_hz) + " Hz in the sidecar but column 't' of " +
+      sidecar.fail("sample_rate_hz", "does not match the recording: " + formatNumber(rec.sample_rate_hz) + " Hz in the sidecar but column '" + specs[0].name + "' of " +
                                          csv_path.string() + " advances by " + formatNumber(median_step) + " s per row (" +
                                          formatNumber(1.0 / median_step) + " Hz)");
   }
@@ -310,6 +313,8 @@ std::vector<Recording> readRecordings(const std::vector<fs::path>& paths) {
       std::sort(found.begin(), found.end());
       files.insert(files.end(), found.begin(), found.end());
     } else if (fs::exists(path)) {
+      if (path.extension() != ".csv")
+        throw InputError(path.string() + ": not a recording (expected a .csv file whose sidecar is the .json of the same stem)");
       files.push_back(path);
     } else {
       throw InputError(path.string() + ": no such file or directory");

@@ -133,6 +133,17 @@ TEST_CASE("a sidecar that does not match its recording is rejected naming the ke
   }
 }
 
+TEST_CASE("calibration factors beside an already calibrated recording are rejected, not ignored", "[analysis]") {
+  TempDir dir("calibrated-factors");
+  writeFile(dir / "sim.csv", "t_s,displacement_mm,force_N,deformation_mm\n0,0,0,0\n0.1,3,1,0.1\n");
+  writeFile(dir / "sim.json", R"({"tool":"PMMA","depth_mm":18,"force_factor":0.5})");
+  CHECK_THAT(errorOf(dir / "sim.csv"), Catch::Contains("/force_factor: given, but") && Catch::Contains("already calibrated"));
+  writeFile(dir / "sim.json", R"({"tool":"PMMA","depth_mm":18,"sample_rate_hz":100})");
+  CHECK_THAT(errorOf(dir / "sim.csv"), Catch::Contains("/sample_rate_hz: does not match the recording"));
+  writeFile(dir / "sim.json", R"({"tool":"PMMA","depth_mm":18,"sample_rate_hz":10})");
+  CHECK(readRecording(dir / "sim.csv").sample_rate_hz == 10.0);
+}
+
 TEST_CASE("a run marked incomplete is rejected", "[analysis]") {
   TempDir dir("incomplete");
   writeFile(dir / "sim.csv", "t_s,displacement_mm,force_N,deformation_mm\n0,0,0,0\n0.1,3,1,0.1\n# incomplete: DEM server gone\n");
@@ -163,4 +174,13 @@ TEST_CASE("directories expand to their recordings and a repeat claimed twice is 
     CHECK_THAT(std::string(e.what()), Catch::Contains("/repeat: repeat 2 of case PMMA, 18 mm depth is also claimed by"));
   }
   CHECK_THROWS_WITH(readRecordings({dir / "missing.csv"}), Catch::Contains("no such file or directory"));
+}
+
+TEST_CASE("spreadsheet exports with a byte order mark and CRLF line ends are read", "[analysis]") {
+  TempDir dir("bom");
+  writeFile(dir / "run.csv", "\xEF\xBB\xBFt,force,deformation\r\n0.00,1,10\r\n0.02,2,11\r\n");
+  writeFile(dir / "run.json", kRawSoilBinSidecar);
+  const Recording rec = readRecording(dir / "run.csv");
+  CHECK(rec.deformation == std::vector<double>{10.0, 11.0});
+  CHECK_THROWS_WITH(readRecordings({dir / "run.json"}), Catch::Contains("run.json: not a recording (expected a .csv file"));
 }

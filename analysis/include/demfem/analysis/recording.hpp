@@ -13,11 +13,13 @@
 //     deformation_factor mm per DAQ unit.
 //   * Calibrated (simulated by the FEM client, or already evaluated): `t_s,force_N,deformation_mm`
 //     plus `displacement_mm` for soil-bin runs and optionally `tilt_deg`. The sidecar gives the
-//     case: `{"tool","depth_mm"}` or `{"tool","mass_kg"}`, optionally "repeat" (default 1) and
-//     "complete" (false = rejected).
+//     case: `{"tool","depth_mm"}` or `{"tool","mass_kg"}`, optionally "repeat" (default 1),
+//     "complete" (false = rejected) and "sample_rate_hz" (checked like a raw one's). Calibration
+//     factors in such a sidecar are an error (they would be silently ignored).
 //   Exactly one of depth_mm (soil-bin run) and mass_kg (calibration-weight run) must be present.
 // - Post: time strictly increasing, every value finite, at least two samples, and for raw
-//   recordings the median time step agrees with 1/sample_rate_hz within 2 %.
+//   recordings (and calibrated ones whose sidecar gives sample_rate_hz) the median time step agrees
+//   with 1/sample_rate_hz within 2 %.
 // - Every problem throws InputError whose message starts with "FILE:LINE:COLUMN:" (CSV, 1-based,
 //   column = cell index) or "FILE: /json/pointer:" (sidecar), then says what is wrong.
 #pragma once
@@ -65,7 +67,8 @@ struct Recording {
   RecordingFormat format = RecordingFormat::Raw;
   CaseKey key;
   int repeat = 1;
-  // Raw format only (zero otherwise). stroke_mm only for soil-bin runs.
+  // Raw format only (zero otherwise; sample_rate_hz also when a calibrated sidecar gives it).
+  // stroke_mm only for soil-bin runs.
   double stroke_mm = 0.0;
   double sample_rate_hz = 0.0;
   double force_factor_N_per_unit = 1.0;
@@ -80,14 +83,13 @@ struct Recording {
   std::vector<std::size_t> line;        // 1-based file line of each sample, for messages
 
   std::size_t size() const { return time_s.size(); }
-  // "file.csv:LINE" of sample i, for messages about a particular sample.
-  std::string where(std::size_t sample) const;
 };
 
 // Reads one recording and its sidecar (same stem, extension .json). Throws InputError.
 Recording readRecording(const std::filesystem::path& csv_path);
 
-// Expands directories to their *.csv files (sorted by name, not recursive), reads every recording
+// Expands directories to their *.csv files (sorted by name, not recursive; a file given by name must
+// end in .csv too), reads every recording
 // and checks that repeats of one case agree (same format and stroke, no repeat number twice).
 // Throws InputError; an empty expansion is an error.
 std::vector<Recording> readRecordings(const std::vector<std::filesystem::path>& paths);
