@@ -26,6 +26,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <optional>
 #include <fcntl.h>
@@ -138,6 +139,25 @@ class StderrToFile {
   int saved_ = -1;
 };
 
+// LIGGGHTS reports an input or run-time error by printing it to its screen file and calling exit().
+// While a command runs, this names it and the screen file, so that an exit handler can tell the user
+// what LIGGGHTS said (the screen file is in the work directory, not on the terminal).
+struct CommandInFlight {
+  std::string command;
+  std::filesystem::path screen;
+};
+CommandInFlight* command_in_flight = nullptr;
+
+void reportLiggghtsExit() {
+  if (!command_in_flight) return;
+  std::string message = "LIGGGHTS stopped the process";
+  std::ifstream screen(command_in_flight->screen);
+  for (std::string line; std::getline(screen, line);)
+    if (line.rfind("ERROR", 0) == 0) message = line;
+  std::fprintf(stderr, "demfem liggghts backend: while running `%s`: %s (full output: %s)\n",
+               command_in_flight->command.c_str(), message.c_str(), command_in_flight->screen.c_str());
+}
+
 struct ToolState {
   std::string name;
   adapter::PlateSurface surface;
@@ -243,6 +263,8 @@ class Engine {
     return total;
   }
 
+  std::int64_t particleCount() const { return static_cast<std::int64_t>(lmp_->atom->natoms); }
+
   void setNodePositions(std::size_t g, const NodeArray& xyz) {
     auto& tool = tools_[g];
     std::vector<double> increment(xyz.size());
@@ -272,7 +294,14 @@ class Engine {
   }
 
  private:
-  void command(const std::string& line) { lmp_->input->one(line.c_str()); }
+  void command(const std::string& line) {
+    static const bool handler_registered = std::atexit(reportLiggghtsExit) == 0;
+    (void)handler_registered;
+    CommandInFlight in_flight{line, work_dir_ / "screen.txt"};
+    command_in_flight = &in_flight;
+    lmp_->input->one(line.c_str());
+    command_in_flight = nullptr;
+  }
 
   double computeScalar(const char* id) {
     return *static_cast<double*>(lammps_extract_compute(lmp_, const_cast<char*>(id), 0, 0));
@@ -678,6 +707,8 @@ class LiggghtsBackend final : public adapter::CouplingApi {
     return live().meshTotalForce(static_cast<std::size_t>(index(geometry)));
   }
 
+  std::int64_t particleCount() { return live().particleCount(); }
+
   void shutdown() override {
     if (!engine_) return;
     OpHeader h{Op::Shutdown, 0, 0, 0, 0};
@@ -715,6 +746,12 @@ std::array<double, 3> meshTotalForce(adapter::CouplingApi& backend, const std::s
   auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
   if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "meshTotalForce: not a liggghts backend");
   return liggghts->meshTotalForce(geometry);
+}
+
+std::int64_t particleCount(adapter::CouplingApi& backend) {
+  auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
+  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "particleCount: not a liggghts backend");
+  return liggghts->particleCount();
 }
 
 bool isLeaderRank() {

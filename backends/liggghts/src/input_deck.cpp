@@ -23,7 +23,8 @@ constexpr double kNeverTouchingRestitution = 0.5;
 // Deposition: particles are inserted at this solid fraction into a slab stack stretched by
 // kSettledSolidFraction / kInsertSolidFraction, so that they settle to about the layer thickness
 // (random packing of nearly equal spheres).
-constexpr double kInsertSolidFraction = 0.30;
+// (Random sequential insertion into thin slabs jams near 0.3: above it insert/pack inserts less.)
+constexpr double kInsertSolidFraction = 0.20;
 constexpr double kSettledSolidFraction = 0.60;
 // A uniform diameter distribution is represented by this many equally likely sizes.
 constexpr int kSizeClasses = 5;
@@ -315,6 +316,10 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   s.push_back("region domain block " + num(x_lo - margin) + " " + num(x_hi + margin) + " " + num(-margin) + " " +
               num(y_hi + margin) + " " + num(z_lo - margin) + " " + num(z_hi + margin) + " units box");
   s.push_back("create_box " + std::to_string(n_types) + " domain");
+  // LIGGGHTS refuses Young's moduli above 1 GPa in SI units unless told the particles are hard.
+  if (std::any_of(materials.begin(), materials.end(),
+                  [&study](const std::string& name) { return study.material(name).youngs_Pa > 1e9; }))
+    s.push_back("hard_particles yes");
   s.push_back("neighbor " + num(0.25 * soil.diameter_max_m) + " bin");
   s.push_back("neigh_modify delay 0");
 
@@ -398,7 +403,7 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
     d.push_back("fix " + tag + "_insert all insert/pack seed " +
                 std::to_string(primeSeed(soil.deposition_seed, 3 * l + 2)) + " distributiontemplate " + tag +
                 "_sizes insert_every once overlapcheck yes all_in yes volumefraction_region " +
-                num(std::min(0.45, kInsertSolidFraction * area_scale)) + " region " + tag + "_slab");
+                num(std::min(0.25, kInsertSolidFraction * area_scale)) + " region " + tag + "_slab");
   }
   // Room for the tools: particles within r_max of a tool's start position are removed before the
   // tool's mesh appears (the tool is inserted into the settled soil).

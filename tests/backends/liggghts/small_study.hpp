@@ -2,10 +2,7 @@
 // LIGGGHTS-compatible contact laws (plain hooke, tangential history, cdt rolling friction).
 #pragma once
 
-#include "demfem/adapter/coupling_api.hpp"
 #include "demfem/study/study.hpp"
-
-#include <array>
 
 namespace demfem::liggghts::testing {
 
@@ -48,29 +45,6 @@ inline study::Study smallStudy() {
   s.dem.backend = "liggghts";
   s.dem.dt_fraction = 0.2;
   return s;
-}
-
-// Continues the tool's rigid motion from where it is now with a new velocity (no jump).
-inline void setVelocity(adapter::CouplingApi& dem, const std::string& tool, const std::array<double, 3>& velocity) {
-  auto m = dem.rigidMotion(tool);
-  const double t = dem.time();
-  for (std::size_t c = 0; c < 3; ++c) m.origin_m[c] += m.velocity_m_s[c] * (t - m.t0_s);
-  m.velocity_m_s = velocity;
-  m.t0_s = t;
-  dem.setRigidMotion(tool, m);
-}
-
-// Lowers the tool vertically at its insertion velocity until its tip is at the working depth, then
-// sets the drag velocity along +z (what the FEM client does before the stroke).
-inline void insertAndStartDrag(adapter::CouplingApi& dem, const study::Study& s, const study::Tool& tool) {
-  const auto m = dem.rigidMotion(tool.name);
-  const double tip_y = m.origin_m[1] + m.velocity_m_s[1] * (dem.time() - m.t0_s);
-  const double travel = tip_y - (s.soil.fill_height_m - tool.motion.depth_m);
-  if (travel > 0) {
-    setVelocity(dem, tool.name, {0, -tool.motion.insertion_velocity_m_s, 0});
-    dem.simulate(travel / tool.motion.insertion_velocity_m_s);
-  }
-  setVelocity(dem, tool.name, {0, 0, tool.motion.velocity_m_s});
 }
 
 }  // namespace demfem::liggghts::testing

@@ -23,6 +23,7 @@
 #include "demfem/study/study.hpp"
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -51,6 +52,9 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, con
 // nodeForces(Instantaneous) summed over the keypoints. Throws BadRequest if `backend` was not made by
 // this backend's makeBackend(), UnknownGeometry for an unknown name.
 std::array<double, 3> meshTotalForce(adapter::CouplingApi& backend, const std::string& geometry);
+
+// Number of particles in the simulation (all ranks). Throws BadRequest as meshTotalForce().
+std::int64_t particleCount(adapter::CouplingApi& backend);
 
 // MPI (`mpirun -np N demfem-dem --backend liggghts ...`): every rank runs demfem-dem. The leader
 // (rank 0) serves the protocol and calls the backend built by makeBackend(); every other rank calls

@@ -1,0 +1,209 @@
+// Backend benchmark: the same study, contact law (plain hooke, tangential history, cdt rolling
+// friction) and calls on the built-in DEM and on LIGGGHTS, side by side: particle-steps per second on
+// 1 and 2 cores (built-in: OpenMP threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean
+// draught force over the same drag window with its scatter over the seeds. Deposition and insertion
+// are not timed. Prints a table; --json writes the same numbers.
+//
+// The LIGGGHTS 2-rank runs start this program again under `mpirun -np 2` in worker mode (--worker).
+#include "demfem/backends/builtin/backend.hpp"
+#include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/backends/liggghts/backend.hpp"
+#include "demfem/backends/liggghts/tool_drive.hpp"
+#include "demfem/cli/cli_support.hpp"
+#include "demfem/study/study.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace {
+
+using namespace demfem;
+using Clock = std::chrono::steady_clock;
+
+struct RunResult {
+  std::string backend;
+  int cores = 1;
+  std::uint64_t seed = 1;
+  std::int64_t particles = 0;
+  std::int64_t steps = 0;
+  double wall_s = 0;
+  double draught_N = 0;  // mean force on the tool against the drag (-z), over the window
+  double particleStepsPerSecond() const { return static_cast<double>(particles) * static_cast<double>(steps) / wall_s; }
+};
+
+nlohmann::json toJson(const RunResult& r) {
+  return {{"backend", r.backend}, {"cores", r.cores},      {"seed", r.seed},
+          {"particles", r.particles}, {"steps", r.steps}, {"wall_s", r.wall_s},
+          {"draught_N", r.draught_N}, {"particle_steps_per_s", r.particleStepsPerSecond()}};
+}
+
+// The study both backends run: the file's soil and tool with the LIGGGHTS-compatible contact law.
+// Settling threshold of the benchmark's soil (J): looser than a study's, to keep deposition short.
+double g_settle_kinetic_energy_J = 1e-3;
+
+study::Study benchStudy(const std::string& file, std::uint64_t seed, int cores) {
+  study::Study s = study::loadStudy(file);
+  s.soil.settle_kinetic_energy_J = g_settle_kinetic_energy_J;
+  s.soil.contact.normal = study::NormalModel::Hooke;
+  s.soil.contact.tangential_history = true;
+  s.soil.contact.cohesion = study::CohesionModel::None;
+  s.soil.contact.rolling = study::RollingModel::Cdt;
+  s.soil.deposition_seed = seed;
+  s.dem.threads = cores;
+  if (s.tools.empty()) throw cli::InputError(file + ": the benchmark drags the study's first tool; it has none");
+  return s;
+}
+
+// Insertion (untimed), then the drag window in FEM-step-sized simulate() calls, as a coupled run does.
+RunResult drag(adapter::CouplingApi& dem, const study::Study& s, double window_s, std::int64_t particles) {
+  const auto& tool = s.tools.front();
+  liggghts::insertAndStartDrag(dem, s, tool);
+  const double interval = s.fem.dt_s > 0 ? s.fem.dt_s : 1e-3;
+  const auto intervals = std::max<long>(1, std::lround(window_s / interval));
+  const double t0 = dem.time();
+  RunResult r;
+  r.particles = particles;
+  const auto start = Clock::now();
+  for (long i = 0; i < intervals; ++i) {
+    dem.simulate(interval);
+    const auto f = dem.nodeForces(tool.name, adapter::ForceMode::IntervalMean);
+    for (std::size_t k = 2; k < f.size(); k += 3) r.draught_N -= f[k];
+  }
+  r.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  r.draught_N /= static_cast<double>(intervals);
+  r.steps = std::llround((dem.time() - t0) / dem.info().dem_time_step_s);
+  return r;
+}
+
+RunResult runBuiltin(const std::string& file, std::uint64_t seed, int cores, double window_s) {
+  const auto s = benchStudy(file, seed, cores);
+  auto dem = builtin::makeBackend(s);
+  const auto soil_file = builtin::soilFile(s, builtin::defaultSoilDirectory());
+  const auto particles = static_cast<std::int64_t>(builtin::readSettledSoil(soil_file).particles.size());
+  RunResult r = drag(*dem, s, window_s, particles);
+  r.backend = "builtin", r.cores = cores, r.seed = seed;
+  return r;
+}
+
+// Rank 0 of a LIGGGHTS run (in-process for 1 rank, under mpirun for more); followers return {}.
+std::optional<RunResult> runLiggghts(const std::string& file, std::uint64_t seed, double window_s) {
+  const auto s = benchStudy(file, seed, 1);
+  if (!liggghts::isLeaderRank()) {
+    liggghts::followLeader(s);
+    return std::nullopt;
+  }
+  auto dem = liggghts::makeBackend(s);
+  RunResult r = drag(*dem, s, window_s, liggghts::particleCount(*dem));
+  int ranks = 1;
+  if (const char* size = std::getenv("OMPI_COMM_WORLD_SIZE")) ranks = std::atoi(size);
+  r.backend = "liggghts", r.cores = ranks, r.seed = seed;
+  dem->shutdown();
+  return r;
+}
+
+RunResult runLiggghtsRanks(const std::string& file, std::uint64_t seed, int ranks, double window_s) {
+  const auto self = std::filesystem::read_symlink("/proc/self/exe");
+  const auto result = std::filesystem::temp_directory_path() /
+                      ("demfem-bench-liggghts-" + std::to_string(::getpid()) + "-" + std::to_string(seed) + ".json");
+  char window[64];
+  std::snprintf(window, sizeof window, "%.17g", window_s);
+  char settle[64];
+  std::snprintf(settle, sizeof settle, "%.17g", g_settle_kinetic_energy_J);
+  const std::string command = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") +
+                              DEMFEM_MPIEXEC + " -np " + std::to_string(ranks) + " --oversubscribe '" + self.string() +
+                              "' --study '" + file + "' --worker " + std::to_string(seed) + " --window-s " + window +
+                              " --settle-kinetic-energy-J " + settle +
+                              " --json '" + result.string() + "'";
+  if (std::system(command.c_str()) != 0) throw std::runtime_error("the LIGGGHTS run under mpirun failed: " + command);
+  std::ifstream in(result);
+  const auto j = nlohmann::json::parse(in);
+  std::filesystem::remove(result);
+  RunResult r;
+  r.backend = j.at("backend"), r.cores = j.at("cores"), r.seed = j.at("seed"), r.particles = j.at("particles");
+  r.steps = j.at("steps"), r.wall_s = j.at("wall_s"), r.draught_N = j.at("draught_N");
+  return r;
+}
+
+struct Summary {
+  double mean = 0, stddev = 0;
+};
+
+Summary summarise(const std::vector<double>& values) {
+  Summary s;
+  for (double v : values) s.mean += v / static_cast<double>(values.size());
+  if (values.size() > 1) {
+    for (double v : values) s.stddev += (v - s.mean) * (v - s.mean);
+    s.stddev = std::sqrt(s.stddev / static_cast<double>(values.size() - 1));
+  }
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"demfem-bench-liggghts: LIGGGHTS against the built-in DEM on one study, 1 and 2 cores"};
+  app.name("demfem-bench-liggghts");
+  std::string file = std::string(DEMFEM_SOURCE_DIR) + "/studies/quick.json";
+  int seeds = 3;
+  double window_s = 0.1;
+  std::uint64_t worker_seed = 0;
+  app.add_option("--study", file, "Study whose soil and first tool are used (contact law replaced)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--seeds", seeds, "Deposition seeds 1..N for the draught-force scatter")->check(CLI::PositiveNumber);
+  app.add_option("--window-s", window_s, "Simulated drag time that is timed and averaged (s)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--settle-kinetic-energy-J", g_settle_kinetic_energy_J,
+                 "Deposition ends below this total kinetic energy (J), both backends")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--worker", worker_seed, "Internal: run LIGGGHTS with this seed as an MPI job and write --json");
+  std::string& json_target = cli::addJsonOption(app);
+  app.callback([&] {
+    if (worker_seed > 0) {
+      if (const auto r = runLiggghts(file, worker_seed, window_s)) cli::writeJson(json_target, toJson(*r));
+      return;
+    }
+    std::vector<RunResult> runs;
+    for (int seed = 1; seed <= seeds; ++seed) {
+      runs.push_back(runBuiltin(file, static_cast<std::uint64_t>(seed), 1, window_s));
+      runs.push_back(*runLiggghts(file, static_cast<std::uint64_t>(seed), window_s));
+    }
+    runs.push_back(runBuiltin(file, 1, 2, window_s));
+    runs.push_back(runLiggghtsRanks(file, 1, 2, window_s));
+
+    std::printf("%-9s %5s %5s %9s %8s %9s %14s %11s\n", "backend", "cores", "seed", "particles", "steps", "wall_s",
+                "particle-st/s", "draught_N");
+    for (const auto& r : runs)
+      std::printf("%-9s %5d %5llu %9lld %8lld %9.2f %14.3e %11.4f\n", r.backend.c_str(), r.cores,
+                  static_cast<unsigned long long>(r.seed), static_cast<long long>(r.particles),
+                  static_cast<long long>(r.steps), r.wall_s, r.particleStepsPerSecond(), r.draught_N);
+    nlohmann::json summary = nlohmann::json::object();
+    for (const std::string backend : {"builtin", "liggghts"}) {
+      std::vector<double> draught;
+      for (const auto& r : runs)
+        if (r.backend == backend && r.cores == 1) draught.push_back(r.draught_N);
+      const Summary d = summarise(draught);
+      std::printf("%-9s draught over %d seeds: %.4f +- %.4f N (1 core)\n", backend.c_str(), seeds, d.mean, d.stddev);
+      summary[backend] = {{"draught_mean_N", d.mean}, {"draught_stddev_N", d.stddev}};
+    }
+    for (int cores : {1, 2}) {
+      double speed[2] = {0, 0};
+      for (const auto& r : runs)
+        if (r.cores == cores && r.seed == 1) speed[r.backend == "builtin" ? 0 : 1] = r.particleStepsPerSecond();
+      std::printf("speed ratio liggghts / builtin on %d core(s): %.3f\n", cores, speed[1] / speed[0]);
+      summary["speed_ratio_liggghts_over_builtin_" + std::to_string(cores) + "_cores"] = speed[1] / speed[0];
+    }
+    nlohmann::json all = nlohmann::json::array();
+    for (const auto& r : runs) all.push_back(toJson(r));
+    cli::writeJson(json_target, {{"study", file},
+                                 {"window_s", window_s},
+                                 {"settle_kinetic_energy_J", g_settle_kinetic_energy_J},
+                                 {"runs", all},
+                                 {"summary", summary}});
+  });
+  return cli::runApp(app, argc, argv);
+}
