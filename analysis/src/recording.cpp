@@ -228,12 +228,14 @@ Recording readRecording(const fs::path& csv_path) {
   if (has_depth == has_mass)
     sidecar.fail(has_depth ? "mass_kg" : "depth_mm",
                  "give exactly one of depth_mm (soil-bin run) and mass_kg (calibration-weight run)");
+  // Rounded to 1e-6 mm / 1e-6 kg so a depth written as 0.018 m * 1e3 still matches 18.
+  const auto keyValue = [](double value) { return std::round(value * 1e6) / 1e6; };
   if (has_depth) {
     rec.key.kind = CaseKind::SoilBin;
-    rec.key.depth_mm = sidecar.positive("depth_mm");
+    rec.key.depth_mm = keyValue(sidecar.positive("depth_mm"));
   } else {
     rec.key.kind = CaseKind::CalibrationWeight;
-    rec.key.mass_kg = sidecar.positive("mass_kg");
+    rec.key.mass_kg = keyValue(sidecar.positive("mass_kg"));
   }
   const bool soil_bin = rec.key.kind == CaseKind::SoilBin;
 
@@ -302,14 +304,15 @@ Recording readRecording(const fs::path& csv_path) {
   return rec;
 }
 
-std::vector<Recording> readRecordings(const std::vector<fs::path>& paths) {
+std::vector<Recording> readRecordings(const std::vector<fs::path>& paths, const std::optional<std::string>& tool_override) {
   std::vector<fs::path> files;
   for (const auto& path : paths) {
     if (fs::is_directory(path)) {
       std::vector<fs::path> found;
       for (const auto& entry : fs::directory_iterator(path))
-        if (entry.is_regular_file() && entry.path().extension() == ".csv") found.push_back(entry.path());
-      if (found.empty()) throw InputError(path.string() + ": directory holds no *.csv recording");
+        if (entry.is_regular_file() && entry.path().extension() == ".csv" && fs::exists(fs::path(entry.path()).replace_extension(".json")))
+          found.push_back(entry.path());
+      if (found.empty()) throw InputError(path.string() + ": directory holds no recording (a *.csv file with a .json sidecar of the same stem)");
       std::sort(found.begin(), found.end());
       files.insert(files.end(), found.begin(), found.end());
     } else if (fs::exists(path)) {
@@ -327,6 +330,7 @@ std::vector<Recording> readRecordings(const std::vector<fs::path>& paths) {
   std::map<std::pair<CaseKey, int>, std::size_t> repeat_owner;
   for (const auto& file : files) {
     Recording rec = readRecording(file);
+    if (tool_override) rec.key.tool = *tool_override;
     const auto [it, inserted] = first_of_case.emplace(rec.key, recordings.size());
     if (!inserted) {
       const Recording& first = recordings[it->second];

@@ -12,6 +12,7 @@ void addCompareCommand(CLI::App& app) {
     AnalysisOptions analysis;
     std::string measured;
     std::string simulated;
+    std::string simulated_tool;
   };
   auto options = std::make_shared<Options>();
   options->analysis.out_dir = "comparison";
@@ -21,6 +22,9 @@ void addCompareCommand(CLI::App& app) {
   cmd->add_option("measured", options->measured, "Measured recording or directory of recordings")->required();
   cmd->add_option("simulated", options->simulated, "Simulated recording or directory of recordings")->required();
   addAnalysisOptions(*cmd, options->analysis);
+  cmd->add_option("--simulated-tool", options->simulated_tool,
+                  "Treat every simulated recording as this tool (the FEM client's sidecar names the tool after the study's tool "
+                  "entry, e.g. \"tool\", while a measured sidecar says e.g. \"PMMA\")");
   cmd->add_option("--fft-low-hz", options->analysis.settings.fft_low_Hz, "Lowest frequency of the power-law fits (default: common band)");
   cmd->add_option("--fft-high-hz", options->analysis.settings.fft_high_Hz, "Highest frequency of the power-law fits (default: common band)");
   std::string& json_target = addJsonOption(*cmd);
@@ -32,7 +36,8 @@ void addCompareCommand(CLI::App& app) {
         throw InputError("--fft-low-hz/--fft-high-hz: the band is empty (" + std::to_string(settings.fft_low_Hz) + " to " +
                          std::to_string(settings.fft_high_Hz) + " Hz)");
       const auto measured = analysis::readRecordings({options->measured});
-      const auto simulated = analysis::readRecordings({options->simulated});
+      const auto simulated = analysis::readRecordings(
+          {options->simulated}, options->simulated_tool.empty() ? std::nullopt : std::optional<std::string>(options->simulated_tool));
       const auto result = analysis::compare(measured, simulated, settings);
 
       analysis::StagedOutput out(options->analysis.out_dir);

@@ -184,3 +184,15 @@ TEST_CASE("spreadsheet exports with a byte order mark and CRLF line ends are rea
   CHECK(rec.deformation == std::vector<double>{10.0, 11.0});
   CHECK_THROWS_WITH(readRecordings({dir / "run.json"}), Catch::Contains("run.json: not a recording (expected a .csv file"));
 }
+
+TEST_CASE("a FEM client output directory reads as one recording: sidecar-less CSVs are skipped, depth round-off ignored", "[analysis]") {
+  TempDir dir("fem-output");
+  writeFile(dir / "sensors.csv", "t_s,displacement_mm,force_N,deformation_mm,tilt_deg\n0,0,0,0,0\n0.001,0.036,0.1,0.01,0.005\n");
+  writeFile(dir / "sensors.json", R"({"tool":"tool","depth_mm":18.000000000000004,"study":"pmma_coupled_18","complete":true})");
+  writeFile(dir / "keypoints.csv", "id,x_m,y_m,z_m\n0,0,0,0\n");
+  const auto recordings = readRecordings({dir.path()}, std::string("PMMA"));
+  REQUIRE(recordings.size() == 1);
+  CHECK(recordings[0].key.tool == "PMMA");
+  CHECK(recordings[0].key.depth_mm == 18.0);
+  CHECK_THROWS_WITH(readRecordings({dir / "keypoints.csv"}), Catch::Contains("keypoints.json: cannot open the sidecar"));
+}

@@ -16,7 +16,8 @@
 //     case: `{"tool","depth_mm"}` or `{"tool","mass_kg"}`, optionally "repeat" (default 1),
 //     "complete" (false = rejected) and "sample_rate_hz" (checked like a raw one's). Calibration
 //     factors in such a sidecar are an error (they would be silently ignored).
-//   Exactly one of depth_mm (soil-bin run) and mass_kg (calibration-weight run) must be present.
+//   Exactly one of depth_mm (soil-bin run) and mass_kg (calibration-weight run) must be present;
+//   both are rounded to 1e-6 (mm, kg) so case keys compare equal despite float round-off.
 // - Post: time strictly increasing, every value finite, at least two samples, and for raw
 //   recordings (and calibrated ones whose sidecar gives sample_rate_hz) the median time step agrees
 //   with 1/sample_rate_hz within 2 %.
@@ -27,6 +28,7 @@
 #include <compare>
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -88,10 +90,13 @@ struct Recording {
 // Reads one recording and its sidecar (same stem, extension .json). Throws InputError.
 Recording readRecording(const std::filesystem::path& csv_path);
 
-// Expands directories to their *.csv files (sorted by name, not recursive; a file given by name must
-// end in .csv too), reads every recording
-// and checks that repeats of one case agree (same format and stroke, no repeat number twice).
-// Throws InputError; an empty expansion is an error.
-std::vector<Recording> readRecordings(const std::vector<std::filesystem::path>& paths);
+// Expands directories to their recordings: the *.csv files that have a .json sidecar (sorted by
+// name, not recursive; other CSV files, e.g. the FEM client's keypoints.csv, are not recordings).
+// A file given by name must end in .csv and needs its sidecar. Reads every recording, replaces the
+// sidecar's tool name by `tool_override` when given (the FEM client names the tool after the
+// study's tool entry), and checks that repeats of one case agree (same format and stroke, no
+// repeat number twice). Throws InputError; an empty expansion is an error.
+std::vector<Recording> readRecordings(const std::vector<std::filesystem::path>& paths,
+                                      const std::optional<std::string>& tool_override = std::nullopt);
 
 }  // namespace demfem::analysis
