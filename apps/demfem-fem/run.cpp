@@ -89,7 +89,6 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
 
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
-  adapter::RemoteProxy dem(remote);
 
   fem::CoupledRunOptions options;
   options.output_dir = !o.output_dir.empty() ? std::filesystem::path(o.output_dir) : study.output.directory;
@@ -100,9 +99,11 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
   ProgressReporter progress;
   if (!o.quiet) options.on_progress = [&progress](const fem::CoupledProgress& p) { progress(p); };
 
+  fem::CoupledDriver driver(study, options);  // FEM model first: the DEM server's idle clock is not running yet
+  adapter::RemoteProxy dem(remote);
   fem::CoupledRunSummary summary;
   try {
-    summary = fem::runCoupled(study, dem, options);
+    summary = driver.run(dem);
   } catch (const std::exception& e) {
     try {
       dem.shutdown();

@@ -1,14 +1,195 @@
+// `demfem run STUDY`: a local coupled run as two processes, demfem-dem (the study's DEM backend) and
+// demfem-fem (the FEM client), connected over ipc://. Both executables are found next to this one.
+// Ctrl-C / SIGTERM are forwarded to both; if either fails, the other is stopped. The FEM client
+// leaves its outputs complete or marked incomplete (fem/coupled_driver.hpp).
 #include "commands.hpp"
 
-#include <stdexcept>
+#include "demfem/cli/cli_support.hpp"
+#include "demfem/study/study.hpp"
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstring>
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <thread>
+
+extern char** environ;
 
 namespace demfem::cli {
 
-// Placeholder until its issue lands: says clearly which part is missing.
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+std::atomic<int> g_forward_signal{0};
+extern "C" void onForwardedSignal(int signal) { g_forward_signal = signal; }
+
+struct RunOptions {
+  std::string study_file;
+  std::string output_dir;
+  std::string backend;
+  std::int64_t steps = 0;
+  std::int64_t checkpoint_every = 0;
+  bool resume = false;
+  bool quiet = false;
+};
+
+// A child process started with posix_spawn; waited for at most once.
+class Child {
+ public:
+  Child(std::string name, const std::vector<std::string>& args) : name_(std::move(name)) {
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    if (const int rc = posix_spawn(&pid_, args[0].c_str(), nullptr, nullptr, argv.data(), environ); rc != 0)
+      throw std::runtime_error("cannot start " + args[0] + ": " + std::strerror(rc));
+  }
+  ~Child() {
+    if (running()) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  const std::string& name() const { return name_; }
+  bool running() const { return !status_; }
+  // Non-blocking: true once the child has exited.
+  bool poll() {
+    if (status_) return true;
+    int status = 0;
+    if (waitpid(pid_, &status, WNOHANG) == pid_) status_ = status;
+    return status_.has_value();
+  }
+  void signal(int sig) const {
+    if (!status_) kill(pid_, sig);
+  }
+  // SIGTERM, then SIGKILL if it has not exited after `grace`.
+  void stop(std::chrono::milliseconds grace) {
+    signal(SIGTERM);
+    const auto deadline = std::chrono::steady_clock::now() + grace;
+    while (!poll() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(20ms);
+    if (!poll()) {
+      signal(SIGKILL);
+      int status = 0;
+      waitpid(pid_, &status, 0);
+      status_ = status;
+    }
+  }
+  bool succeeded() const { return status_ && WIFEXITED(*status_) && WEXITSTATUS(*status_) == 0; }
+  std::string outcome() const {
+    if (!status_) return "still running";
+    if (WIFEXITED(*status_)) return "exit status " + std::to_string(WEXITSTATUS(*status_));
+    return std::string("killed by signal ") + strsignal(WTERMSIG(*status_));
+  }
+
+ private:
+  std::string name_;
+  pid_t pid_ = -1;
+  std::optional<int> status_;
+};
+
+fs::path siblingExecutable(const std::string& name) {
+  const fs::path self = fs::read_symlink("/proc/self/exe");
+  const fs::path exe = self.parent_path() / name;
+  if (!fs::exists(exe)) throw std::runtime_error("cannot find " + name + " next to " + self.string());
+  return exe;
+}
+
+[[noreturn]] void endBySignal(int signal) {
+  std::signal(signal, SIG_DFL);
+  std::raise(signal);
+  std::abort();
+}
+
+void runLocal(const RunOptions& o, const std::string& json_target) {
+  const study::Study study = study::loadStudy(o.study_file);  // validate before starting anything
+  const fs::path dem_exe = siblingExecutable("demfem-dem"), fem_exe = siblingExecutable("demfem-fem");
+  const fs::path work = fs::temp_directory_path() / ("demfem-run-" + std::to_string(getpid()));
+  fs::create_directories(work);
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() { std::error_code ec; fs::remove_all(dir, ec); }
+  } cleanup{work};
+  const std::string endpoint = "ipc://" + (work / "dem.ipc").string();
+  const fs::path endpoint_file = work / "endpoint";
+
+  std::signal(SIGINT, onForwardedSignal);
+  std::signal(SIGTERM, onForwardedSignal);
+
+  std::vector<std::string> dem_args{dem_exe.string(), "--study", o.study_file, "--bind", endpoint, "--endpoint-file",
+                                    endpoint_file.string()};
+  if (!o.backend.empty()) dem_args.insert(dem_args.end(), {"--backend", o.backend});
+  Child dem("demfem-dem", dem_args);
+
+  // The DEM server binds after building its backend (deposition may take a while): wait for it.
+  while (!fs::exists(endpoint_file)) {
+    if (const int sig = g_forward_signal) {
+      dem.stop(5s);
+      endBySignal(sig);
+    }
+    if (dem.poll()) throw std::runtime_error("demfem-dem stopped before serving (" + dem.outcome() + ")");
+    std::this_thread::sleep_for(20ms);
+  }
+
+  std::vector<std::string> fem_args{fem_exe.string(), "run", o.study_file, "--connect", endpoint};
+  if (!o.output_dir.empty()) fem_args.insert(fem_args.end(), {"--output", o.output_dir});
+  if (o.steps > 0) fem_args.insert(fem_args.end(), {"--steps", std::to_string(o.steps)});
+  if (o.checkpoint_every > 0) fem_args.insert(fem_args.end(), {"--checkpoint-every", std::to_string(o.checkpoint_every)});
+  if (o.resume) fem_args.push_back("--resume");
+  if (o.quiet) fem_args.push_back("--quiet");
+  if (!json_target.empty()) fem_args.insert(fem_args.end(), {"--json", json_target});
+  Child fem("demfem-fem", fem_args);
+
+  int forwarded = 0;
+  for (;;) {
+    if (const int sig = g_forward_signal.exchange(0)) {
+      forwarded = sig;
+      fem.signal(sig);  // the FEM client marks its outputs incomplete and exits
+      dem.signal(sig);
+    }
+    const bool fem_done = fem.poll(), dem_done = dem.poll();
+    if (fem_done && dem_done) break;
+    if (fem_done && !fem.succeeded()) dem.stop(5s);          // nobody will shut the DEM down
+    if (dem_done && !dem.succeeded() && !fem_done) fem.stop(10s);  // the FEM would wait for its timeout
+    if (fem_done && fem.succeeded() && !dem_done) {
+      // The client shut the server down; give it a moment to exit on its own.
+      const auto deadline = std::chrono::steady_clock::now() + 10s;
+      while (!dem.poll() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(20ms);
+      if (!dem.poll()) dem.stop(5s);
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+  if (forwarded) endBySignal(forwarded);
+  if (!fem.succeeded() || !dem.succeeded())
+    throw std::runtime_error("coupled run failed: demfem-fem " + fem.outcome() + ", demfem-dem " + dem.outcome() +
+                             " (see their messages above; outputs are marked incomplete)");
+}
+
+}  // namespace
+
 void addRunCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("run", "Run a coupled study: starts demfem-dem and demfem-fem [not built yet: coupling issue]");
-  cmd->allow_extras();
-  cmd->callback([] { throw std::runtime_error("'demfem run' is not built yet (coupling issue)"); });
+  auto* cmd = app.add_subcommand("run",
+                                 "Run a coupled or DEM-only study locally: starts demfem-dem (the study's DEM backend) and "
+                                 "demfem-fem, connected over ipc://");
+  auto o = std::make_shared<RunOptions>();
+  cmd->add_option("study", o->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
+  cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
+  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps")->check(CLI::PositiveNumber);
+  cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
+  cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
+  cmd->add_flag("--quiet", o->quiet, "No progress output");
+  std::string& json = addJsonOption(*cmd);
+  cmd->callback([o, &json] { runLocal(*o, json); });
 }
 
 }  // namespace demfem::cli

@@ -46,6 +46,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -86,9 +87,25 @@ class CoupledRunInterrupted : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Runs the first tool of `study` (kind Coupled or DemOnly) against `dem`. Throws
-// std::invalid_argument for a study it cannot run or mismatched keypoints, adapter::CouplingError
-// for DEM failures, CoupledRunInterrupted when stop_requested() returned true.
-CoupledRunSummary runCoupled(const study::Study& study, adapter::CouplingApi& dem, const CoupledRunOptions& options);
+// Drives the first tool of a study (kind Coupled or DemOnly).
+class CoupledDriver {
+ public:
+  // Builds the FEM model (Eq 11-15 reduction: the slow part) before any DEM is contacted, so a
+  // server's idle timeout does not run during it. Throws std::invalid_argument for a study it cannot
+  // run (other kinds, no tool, bad motion) or an invalid FEM model.
+  CoupledDriver(const study::Study& study, CoupledRunOptions options);
+  ~CoupledDriver();
+  CoupledDriver(const CoupledDriver&) = delete;
+  CoupledDriver& operator=(const CoupledDriver&) = delete;
+
+  // Runs the cycle against `dem` (once per driver). Throws std::invalid_argument for mismatched
+  // keypoints, adapter::CouplingError for DEM failures, CoupledRunInterrupted when
+  // stop_requested() returned true; outputs are then marked incomplete (see above).
+  CoupledRunSummary run(adapter::CouplingApi& dem);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace demfem::fem

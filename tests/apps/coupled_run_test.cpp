@@ -1,0 +1,223 @@
+// End-to-end tests of demfem-dem + demfem-fem as separate processes over tcp://127.0.0.1 (loopback,
+// free ports chosen by the server). Every wait is bounded.
+#include "demfem/fem/integrator.hpp"
+#include "demfem/fem/model.hpp"
+#include "demfem/fem/sensors.hpp"
+#include "demfem/study/study.hpp"
+#include "process.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <numbers>
+
+using namespace demfem;
+using namespace demfem::testing;
+
+namespace {
+
+// Load of the harmonic test backend used below (adapter/test_backends.hpp).
+constexpr double kForceN = -5.0, kFrequencyHz = 40.0;
+
+struct Server {
+  Server(const fs::path& dir, const std::string& name, std::vector<std::string> extra)
+      : endpoint_file(dir / (name + ".endpoint")),
+        process([&] {
+          std::vector<std::string> args{app("demfem-dem"), "--bind", "tcp://127.0.0.1:*", "--endpoint-file",
+                                        endpoint_file.string(), "--idle-timeout-s", "20", "--connect-timeout-s", "60"};
+          args.insert(args.end(), extra.begin(), extra.end());
+          return args;
+        }(), dir / name) {
+    if (!waitForFile(endpoint_file, process, 20s)) FAIL("demfem-dem did not start: " << process.err());
+    endpoint = endpointFrom(endpoint_file);
+  }
+  fs::path endpoint_file;
+  Process process;
+  std::string endpoint;
+};
+
+std::vector<std::string> harmonicArgs(const fs::path& study) {
+  return {"--backend", "harmonic", "--study", study.string(), "--test-force-N", std::to_string(kForceN),
+          "--test-frequency-Hz", std::to_string(kFrequencyHz)};
+}
+
+std::vector<std::string> femArgs(const fs::path& study, const std::string& endpoint, const fs::path& out,
+                                 std::vector<std::string> extra) {
+  std::vector<std::string> args{app("demfem-fem"), "run", study.string(), "--connect", endpoint, "--output", out.string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+// The FEM alone (fem/ API, no coupling) with the closed-form load of the harmonic backend:
+// tip-row keypoints (y = 0) carry F/n (1 + x/W) times the time average of sin(2 pi f t) over the DEM
+// interval before each step (the interval-mean convention; zero before the first interval since
+// sin(0) = 0). Sensor readings after each of the last `rows` of `total_steps` steps.
+std::vector<fem::SensorReadings> femAloneHistory(const fs::path& study_file, int total_steps, std::size_t rows) {
+  const study::Study study = study::loadStudy(study_file);
+  const auto& tool = study.tools[0];
+  const fem::ReducedModel model = fem::reduce(fem::buildFullModel(tool));
+  fem::ThreeLevelIntegrator integrator(model, study.fem.dt_s, {tool.fem.alpha_s, tool.fem.beta_per_s});
+  const fem::Sensors sensors(model, tool.constraints.sensor_from_top_m);
+  std::vector<int> tip;
+  for (int k = 0; k < model.keypointCount(); ++k)
+    if (model.keypoints(k, 1) < 1e-9) tip.push_back(k);
+  REQUIRE(tip.size() == 10);  // 5 keypoints across the 20 mm width, both faces
+  const double w = 2 * std::numbers::pi * kFrequencyHz, dt = study.fem.dt_s;
+  integrator.start(Eigen::VectorXd::Zero(model.dofCount()));
+  std::vector<fem::SensorReadings> history;
+  for (int i = 0; i < total_steps; ++i) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(model.dofCount());
+    if (i > 0) {
+      const double a = (i - 1) * dt, b = i * dt, mean_sin = (std::cos(w * a) - std::cos(w * b)) / (w * (b - a));
+      for (const int k : tip)
+        f[3 * k + 2] = kForceN / static_cast<double>(tip.size()) * (1 + model.keypoints(k, 0) / tool.geometry.width_m) * mean_sin;
+    }
+    const auto& u = integrator.step(f);
+    if (static_cast<std::size_t>(total_steps - i) <= rows) history.push_back(sensors.read(u, integrator.reactions()));
+  }
+  return history;
+}
+
+// Runs demfem-fem for `total_steps` against the server started by `server_args` (which must write
+// its endpoint to ENDPOINT_FILE, substituted), and checks its sensor history against the FEM alone.
+void checkAgainstFemAlone(const fs::path& dir, const fs::path& study_file, std::vector<std::string> server_args) {
+  const int total_steps = 160;
+  const fs::path endpoint_file = dir / "server.endpoint";
+  for (auto& a : server_args)
+    if (a == "ENDPOINT_FILE") a = endpoint_file.string();
+  {
+    Process server(server_args, dir / "server");
+    REQUIRE(waitForFile(endpoint_file, server, 20s));
+    Process fem(femArgs(study_file, endpointFrom(endpoint_file), dir / "out", {"--steps", std::to_string(total_steps)}), dir / "fem");
+    REQUIRE(exitedOk(fem.wait(120s)));
+    CHECK(exitedOk(server.wait(20s)));  // shut down by the client
+  }
+  const auto rows = csvRows(dir / "out" / "sensors.csv");
+  REQUIRE(rows.size() > 10);  // the drag phase (after the insertion steps) was recorded
+  const auto reference = femAloneHistory(study_file, total_steps, rows.size());
+  REQUIRE(reference.size() == rows.size());
+  double force_scale = 0, deformation_scale = 0, tilt_scale = 0;
+  for (const auto& r : reference) {
+    force_scale = std::max(force_scale, std::abs(r.load_cell_N));
+    deformation_scale = std::max(deformation_scale, std::abs(r.deformation_mm));
+    tilt_scale = std::max(tilt_scale, std::abs(r.tip_tilt_deg));
+  }
+  REQUIRE(force_scale > 0.1);  // the load reached the load cell: the comparison is not vacuous
+  // Tolerance 1e-12 relative to each column's largest value (arrays travel bit-exact; only the
+  // evaluation order of the closed-form load differs).
+  const double dt = study::loadStudy(study_file).fem.dt_s;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    CHECK(rows[i][0] == Approx(static_cast<double>(i + 1) * dt).margin(1e-12));
+    CHECK(std::abs(rows[i][2] - reference[i].load_cell_N) <= 1e-12 * force_scale);
+    CHECK(std::abs(rows[i][3] - reference[i].deformation_mm) <= 1e-12 * deformation_scale);
+    CHECK(std::abs(rows[i][4] - reference[i].tip_tilt_deg) <= 1e-12 * tilt_scale);
+  }
+  const auto sidecar = nlohmann::json::parse(readText(dir / "out" / "sensors.json"));
+  CHECK(sidecar["complete"] == true);
+  CHECK(fs::file_size(dir / "out" / "keypoint_displacements.f64") == rows.size() * (1 + 3 * 250) * sizeof(double));
+}
+
+}  // namespace
+
+TEST_CASE("coupled run against the harmonic backend over tcp equals the FEM alone with the same load", "[apps][physics]") {
+  const fs::path dir = freshDir("harmonic-tcp");
+  const fs::path study_file = fastQuickStudy(dir);
+  std::vector<std::string> server{app("demfem-dem"), "--bind", "tcp://127.0.0.1:*", "--endpoint-file", "ENDPOINT_FILE"};
+  for (const auto& a : harmonicArgs(study_file)) server.push_back(a);
+  checkAgainstFemAlone(dir, study_file, server);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("the Python adapter example serves demfem-fem and matches the FEM alone", "[apps][physics]") {
+  const fs::path dir = freshDir("python-adapter");
+  const fs::path study_file = fastQuickStudy(dir);
+  checkAgainstFemAlone(dir, study_file,
+                       {"/usr/bin/python3", (sourceDir() / "examples" / "python_adapter" / "harmonic_server.py").string(),
+                        "--study", study_file.string(), "--bind", "tcp://127.0.0.1:*", "--endpoint-file", "ENDPOINT_FILE",
+                        "--force-N", std::to_string(kForceN), "--frequency-Hz", std::to_string(kFrequencyHz)});
+  fs::remove_all(dir);
+}
+
+TEST_CASE("killing demfem-dem mid-run stops demfem-fem within its timeout, CSV marked incomplete", "[apps]") {
+  const fs::path dir = freshDir("kill-dem");
+  const fs::path study_file = fastQuickStudy(dir);
+  Server dem(dir, "dem", harmonicArgs(study_file));
+  Process fem(femArgs(study_file, dem.endpoint, dir / "out", {"--timeout-s", "1", "--quiet"}), dir / "fem");
+  // Wait until the drag phase has started writing rows, then kill the DEM server.
+  const fs::path partial = dir / "out" / "sensors.csv.partial";
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (!(fs::exists(partial) && fs::file_size(partial) > 2000) && std::chrono::steady_clock::now() < deadline && !fem.exited())
+    std::this_thread::sleep_for(10ms);
+  REQUIRE_FALSE(fem.exited());
+  dem.process.signal(SIGKILL);
+  const auto killed = std::chrono::steady_clock::now();
+  const int status = fem.wait(30s);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count();
+  CHECK_FALSE(exitedOk(status));
+  CHECK(seconds < 1.0 + 4.0);  // the 1 s timeout plus process teardown
+  CHECK_THAT(fem.err(), Catch::Contains("no reply from the DEM server") && Catch::Contains("gone"));
+  const std::string csv = readText(dir / "out" / "sensors.csv");
+  CHECK(csv.find("\n# incomplete: ") != std::string::npos);
+  CHECK(nlohmann::json::parse(readText(dir / "out" / "sensors.json"))["complete"] == false);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a client with a wrong CurveZMQ key is refused by demfem-dem", "[apps]") {
+  const fs::path dir = freshDir("curve");
+  const fs::path study_file = fastQuickStudy(dir);
+  for (const char* name : {"keys", "other"}) {
+    Process make({app("demfem-dem"), "--make-curve-keys", (dir / name).string()}, dir / (std::string("make-") + name));
+    REQUIRE(exitedOk(make.wait(10s)));
+  }
+  // The intruder knows the server's public key but has its own client key pair.
+  fs::copy_file(dir / "keys" / "server.pub", dir / "other" / "server.pub", fs::copy_options::overwrite_existing);
+  auto args = harmonicArgs(study_file);
+  args.insert(args.end(), {"--curve-keys", (dir / "keys").string()});
+  Server dem(dir, "dem", args);
+  Process intruder(femArgs(study_file, dem.endpoint, dir / "out-bad", {"--curve-keys", (dir / "other").string(), "--timeout-s", "5"}),
+                   dir / "intruder");
+  CHECK_FALSE(exitedOk(intruder.wait(30s)));
+  CHECK_THAT(intruder.err(), Catch::Contains("CurveZMQ"));
+  // The rightful client is served by the same server afterwards.
+  Process client(femArgs(study_file, dem.endpoint, dir / "out", {"--curve-keys", (dir / "keys").string(), "--steps", "5", "--quiet"}),
+                 dir / "client");
+  CHECK(exitedOk(client.wait(60s)));
+  CHECK(exitedOk(dem.process.wait(20s)));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a checkpointed coupled run resumed after a kill ends in the same state as an uninterrupted run", "[apps][physics]") {
+  const fs::path dir = freshDir("resume");
+  const fs::path study_file = fastQuickStudy(dir);
+  const std::vector<std::string> run_args{"--steps", "200", "--checkpoint-every", "25", "--quiet"};
+  {
+    Server dem(dir, "dem-full", harmonicArgs(study_file));
+    Process fem(femArgs(study_file, dem.endpoint, dir / "full", run_args), dir / "fem-full");
+    REQUIRE(exitedOk(fem.wait(120s)));
+  }
+  {
+    Server dem(dir, "dem-killed", harmonicArgs(study_file));
+    Process fem(femArgs(study_file, dem.endpoint, dir / "resumed", run_args), dir / "fem-killed");
+    // Kill both once the checkpoint after step 125 has been committed, mid-run.
+    const fs::path committed = dir / "resumed" / "checkpoint" / "dem_125.ckpt";
+    const auto deadline = std::chrono::steady_clock::now() + 60s;
+    while (!fs::exists(committed) && !fem.exited() && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(2ms);
+    REQUIRE_FALSE(fem.exited());
+    fem.signal(SIGKILL);
+    dem.process.signal(SIGKILL);
+    fem.wait(10s);
+  }
+  REQUIRE(fs::exists(dir / "resumed" / "sensors.csv.partial"));
+  {
+    Server dem(dir, "dem-resumed", harmonicArgs(study_file));
+    auto args = run_args;
+    args.push_back("--resume");
+    Process fem(femArgs(study_file, dem.endpoint, dir / "resumed", args), dir / "fem-resumed");
+    REQUIRE(exitedOk(fem.wait(120s)));
+  }
+  // Bit-identical: the whole sensor history and every keypoint displacement.
+  CHECK(readText(dir / "resumed" / "sensors.csv") == readText(dir / "full" / "sensors.csv"));
+  CHECK(readText(dir / "resumed" / "keypoint_displacements.f64") == readText(dir / "full" / "keypoint_displacements.f64"));
+  fs::remove_all(dir);
+}
