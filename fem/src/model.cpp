@@ -196,10 +196,16 @@ int parseDofMask(const std::string& text) {
   return mask;
 }
 
-template <class Solver>
-Eigen::VectorXd solveFree(Solver& solver, const Eigen::VectorXd& rhs) {
-  Eigen::VectorXd x = solver.solve(rhs);
-  if (solver.info() != Eigen::Success) throw std::runtime_error("static solve failed");
+// Solves A x = b with a factorization of A plus two steps of iterative refinement, so thin-plate
+// round-off (K is ill conditioned) stays near machine precision.
+template <class Solver, class Matrix>
+Eigen::VectorXd solveRefined(const Solver& solver, const Matrix& A, const Eigen::VectorXd& b) {
+  Eigen::VectorXd x = solver.solve(b);
+  for (int pass = 0; pass < 2; ++pass) {
+    const Eigen::VectorXd residual = b - A * x;
+    x += solver.solve(residual);
+  }
+  if (!x.allFinite()) throw std::runtime_error("static solve failed (non-finite displacement)");
   return x;
 }
 
@@ -258,6 +264,16 @@ FullModel buildFullModel(const study::Tool& tool, HexIntegration integration) {
       break;
   }
   throw std::invalid_argument("tool '" + tool.name + "': a cone penetrometer is rigid and has no FEM model");
+}
+
+const study::Tool& deformableTool(const study::Study& study, const std::string& name) {
+  std::string available;
+  for (const study::Tool& tool : study.tools) {
+    if ((name.empty() || tool.name == name) && tool.fem.deformable) return tool;
+    available += (available.empty() ? "" : ", ") + tool.name + (tool.fem.deformable ? "" : " (rigid)");
+  }
+  throw std::invalid_argument("study '" + study.name + "' has no deformable tool" + (name.empty() ? "" : " named '" + name + "'") +
+                              " (tools: " + (available.empty() ? "none" : available) + ")");
 }
 
 FullModel readMatrixMarketModel(const std::filesystem::path& mass_file, const std::filesystem::path& stiffness_file,
@@ -382,7 +398,11 @@ ReducedModel reduce(const FullModel& model) {
     throw std::runtime_error("keypoint reduction: K_bb (the " + std::to_string(b_dofs.size()) +
                              " non-keypoint DOFs) is not positive definite: the condensed nodes form a mechanism");
   // Eq (13): u_b = T_b u_a with T_b = -K_bb^-1 K_ba; T = [I; T_b].
-  const Eigen::MatrixXd T_b = -K_bb_factor.solve(Eigen::MatrixXd(K_ba));
+  const Eigen::MatrixXd K_ba_dense(K_ba);
+  Eigen::MatrixXd T_b = -K_bb_factor.solve(K_ba_dense);
+  // One step of iterative refinement: the thin plate's K_bb is ill conditioned, and Eq (15)
+  // subtracts nearly equal terms, so T_b's round-off would otherwise reach 1e-9 of the response.
+  T_b -= K_bb_factor.solve(K_ba_dense + K_bb * T_b);
   // Eq (15): K_r = K_aa - K_ab K_bb^-1 K_ba = K_aa + K_ba^T T_b.
   r.K = K_aa + K_ba.transpose() * T_b;
   // M_r = T^T M T = M_aa + M_ab T_b + T_b^T M_ba + T_b^T M_bb T_b. The last term, the only dense
@@ -412,11 +432,12 @@ void addLumpedMass(ReducedModel& model, const std::vector<int>& dofs, double mas
 StaticSolution solveStatic(const ReducedModel& model, const Eigen::VectorXd& f) {
   if (f.size() != model.dofCount()) throw std::invalid_argument("solveStatic: force vector has the wrong size");
   const std::vector<int> free = model.freeDofs();
-  Eigen::LLT<Eigen::MatrixXd> K_ff(extractDense(model.K, free, free));
-  if (K_ff.info() != Eigen::Success) throw std::runtime_error("solveStatic: K on the free DOFs is not positive definite (tool not held?)");
+  const Eigen::MatrixXd K_ff = extractDense(model.K, free, free);
+  Eigen::LLT<Eigen::MatrixXd> K_ff_factor(K_ff);
+  if (K_ff_factor.info() != Eigen::Success) throw std::runtime_error("solveStatic: K on the free DOFs is not positive definite (tool not held?)");
   StaticSolution s;
   s.displacement = Eigen::VectorXd::Zero(model.dofCount());
-  s.displacement(free) = solveFree(K_ff, Eigen::VectorXd(f(free)));
+  s.displacement(free) = solveRefined(K_ff_factor, K_ff, Eigen::VectorXd(f(free)));
   s.reaction = model.K * s.displacement - f;  // Eq (2) with the support forces
   s.reaction(free).setZero();
   return s;
@@ -425,11 +446,12 @@ StaticSolution solveStatic(const ReducedModel& model, const Eigen::VectorXd& f) 
 StaticSolution solveStatic(const FullModel& model, const Eigen::VectorXd& f) {
   if (f.size() != model.dofCount()) throw std::invalid_argument("solveStatic: force vector has the wrong size");
   const std::vector<int> free = complement(model.dofCount(), model.constraints.fixed_dofs);
-  Eigen::CholmodSupernodalLLT<SparseMatrix> K_ff(extract(model.K, free, free));
-  if (K_ff.info() != Eigen::Success) throw std::runtime_error("solveStatic: K on the free DOFs is not positive definite (tool not held?)");
+  const SparseMatrix K_ff = extract(model.K, free, free);
+  Eigen::CholmodSimplicialLLT<SparseMatrix> K_ff_factor(K_ff);
+  if (K_ff_factor.info() != Eigen::Success) throw std::runtime_error("solveStatic: K on the free DOFs is not positive definite (tool not held?)");
   StaticSolution s;
   s.displacement = Eigen::VectorXd::Zero(model.dofCount());
-  s.displacement(free) = solveFree(K_ff, Eigen::VectorXd(f(free)));
+  s.displacement(free) = solveRefined(K_ff_factor, K_ff, Eigen::VectorXd(f(free)));
   s.reaction = model.K * s.displacement - f;
   s.reaction(free).setZero();
   return s;

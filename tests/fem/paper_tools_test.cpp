@@ -50,8 +50,9 @@ CalculixResult runCalculix(const FullModel& model, const study::Tool& tool, HexI
     deck << "*ELEMENT, TYPE=" << (integration == HexIntegration::Reduced ? "C3D20R" : "C3D20") << ", ELSET=EALL\n";
     for (std::size_t e = 0; e < model.mesh.elements.size(); ++e) {
       const auto& nodes = model.mesh.elements[e].nodes;
+      // At most 16 entries per line: element number and 15 nodes, the rest on a continuation line.
       deck << e + 1;
-      for (std::size_t a = 0; a < nodes.size(); ++a) deck << ", " << nodes[a] + 1 << (a == 14 ? ",\n" : "");
+      for (std::size_t a = 0; a < nodes.size(); ++a) deck << (a == 15 ? ",\n" : ", ") << nodes[a] + 1;
       deck << "\n";
     }
     std::vector<int> clamp, load_cell;

@@ -95,6 +95,10 @@ FullModel buildPlateModel(const study::Tool& tool, HexIntegration integration = 
 // mesh surface) or MatrixMarket (readMatrixMarketModel). Constraints from tool.constraints.
 FullModel buildFullModel(const study::Tool& tool, HexIntegration integration = HexIntegration::Reduced);
 
+// The tool of `study` named `name`, or its first deformable tool if `name` is empty. Throws
+// std::invalid_argument naming the available tools if there is no such (deformable) tool.
+const study::Tool& deformableTool(const study::Study& study, const std::string& name);
+
 // Externally assembled M and K (MatrixMarket coordinate real, general or symmetric; e.g. exported by
 // Ansys) plus a keypoint list file, one keypoint per line (`#` starts a comment):
 //   <node index, 0-based, into the 3-DOF-per-node matrices> <x_m> <y_m> <z_m>
