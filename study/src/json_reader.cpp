@@ -100,7 +100,7 @@ std::string formatNumber(double value) {
   const std::size_t e = scientific.find('e');
   const int exponent = std::stoi(scientific.substr(e + 1));
   const double magnitude = std::abs(value);
-  if (magnitude >= 1e6 || magnitude < 1e-4) return trimZeros(scientific.substr(0, e)) + "e" + std::to_string(exponent);
+  if (magnitude >= 1e5 || magnitude < 1e-4) return trimZeros(scientific.substr(0, e)) + "e" + std::to_string(exponent);
   std::snprintf(buffer, sizeof buffer, "%.*f", std::max(0, digits - 1 - exponent), value);
   return trimZeros(buffer);
 }

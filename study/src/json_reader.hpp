@@ -26,7 +26,7 @@ std::string unitOf(std::string_view key);
 double siFactorOf(std::string_view key);
 
 // Numbers in messages and descriptions: the fewest significant digits (at most 12) that reproduce
-// the value; scientific below 1e-4 and from 1e6 on, with a bare exponent (-4.06e9, 7.93e-7, 0.00055,
+// the value; scientific below 1e-4 and from 1e5 on, with a bare exponent (-4.06e9, 7.93e-7, 0.00055,
 // 2600).
 std::string formatNumber(double value);
 

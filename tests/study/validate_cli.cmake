@@ -13,7 +13,8 @@ foreach(path /tools/0/fem/E_Pa /dem/colour /tools/0/motion/depth_mm /soil/partic
     message(FATAL_ERROR "no message for ${path} in:\n${err}")
   endif()
 endforeach()
-string(REGEX MATCHALL "five_mistakes.json: /[^\n]*" lines "${err}")
+string(REPLACE ";" "," err_text "${err}")  # ';' would split the CMake list below
+string(REGEX MATCHALL "five_mistakes.json: /[^\n]*" lines "${err_text}")
 list(LENGTH lines count)
 if(NOT count EQUAL 5)
   message(FATAL_ERROR "expected 5 messages, got ${count}:\n${err}")
