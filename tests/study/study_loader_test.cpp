@@ -312,3 +312,49 @@ TEST_CASE("material and interaction look-ups are symmetric and reject unknown na
   CHECK_THROWS_AS(s.material("sand"), std::out_of_range);
   CHECK_THROWS_AS(s.interaction("steel", "pmma"), std::out_of_range);
 }
+
+TEST_CASE("cones stay inside the bin and apart, and move only down", "[study]") {
+  json doc = paper("cpt.json");
+  CHECK(issuesOf(doc).empty());
+  doc["tools"][1]["motion"]["start_z_mm"] = 150;  // 25 mm from cone 1; a 5 cm^2 cone is 25.2 mm wide
+  requireSingleIssue(doc, "/tools/1/motion", "the cone overlaps the cone of /tools/0");
+  doc = paper("cpt.json");
+  doc["tools"][0]["motion"]["center_x_mm"] = 10;  // radius 12.6 mm: crosses the side wall
+  requireSingleIssue(doc, "/tools/0/motion/center_x_mm", "the tool (x from -2.61566");
+  doc = paper("cpt.json");
+  doc["tools"][0]["motion"]["stroke_mm"] = 55;
+  requireSingleIssue(doc, "/tools/0/motion/stroke_mm", "does not apply: a cone moves straight down");
+  doc = paper("cpt.json");
+  doc["tools"][0]["geometry"] = {{"kind", "plate"}, {"length_mm", 200}, {"width_mm", 40}, {"thickness_mm", 4}};
+  const std::vector<Issue> plate = issuesOf(doc);
+  REQUIRE_FALSE(plate.empty());
+  CHECK(plate[0].path == "/tools/0/geometry/kind");
+  CHECK(plate[0].message == "a cone-penetration study needs geometry kind \"cone\"");
+}
+
+TEST_CASE("external meshes and matrices must exist; matrices carry the material", "[study]") {
+  json doc = quick();
+  doc["tools"][0]["geometry"] = {{"kind", "gmsh"}, {"length_mm", 200}, {"mesh_file", "no_such_tool.msh"}};
+  const std::vector<Issue> gmsh = issuesOf(doc);
+  REQUIRE(gmsh.size() == 1);
+  CHECK(gmsh[0].path == "/tools/0/geometry/mesh_file");
+  CHECK(gmsh[0].message.rfind("file not found: ", 0) == 0);
+  // The study file itself stands in for an existing matrix file: only existence is checked here.
+  doc = quick();
+  doc["tools"][0]["geometry"] = {{"kind", "matrix-market"},
+                                 {"length_mm", 200},
+                                 {"mass_file", "quick.json"},
+                                 {"stiffness_file", "quick.json"},
+                                 {"keypoint_file", "quick.json"}};
+  const std::vector<Issue> matrices = [&] {
+    try {
+      parseStudy(doc.dump(), (kSource / "studies/mutated.json").string());
+    } catch (const StudyError& e) {
+      return e.issues();
+    }
+    return std::vector<Issue>{};
+  }();
+  // E, nu, density and element order are in the matrices already.
+  REQUIRE(matrices.size() == 4);
+  for (const Issue& i : matrices) CHECK(i.message.find("already contain") != std::string::npos);
+}
