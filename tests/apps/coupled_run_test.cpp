@@ -1,5 +1,6 @@
 // End-to-end tests of demfem-dem + demfem-fem as separate processes over tcp://127.0.0.1 (loopback,
 // free ports chosen by the server). Every wait is bounded.
+#include "demfem/adapter/test_backends.hpp"
 #include "demfem/fem/integrator.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/sensors.hpp"
@@ -48,39 +49,42 @@ std::vector<std::string> femArgs(const fs::path& study, const std::string& endpo
   return args;
 }
 
-// The FEM alone (fem/ API, no coupling) with the closed-form load of the harmonic backend:
-// tip-row keypoints (y = 0) carry F/n (1 + x/W) times the time average of sin(2 pi f t) over the DEM
-// interval before each step (the interval-mean convention; zero before the first interval since
-// sin(0) = 0). Sensor readings after each of the last `rows` of `total_steps` steps.
+// The FEM alone (fem/ API, no coupling, no processes) with the same load: the harmonic test backend
+// object in this process supplies the forces (its closed form is checked against quadrature in
+// tests/adapter/test_backends_test.cpp). Sensor readings after each of the last `rows` of
+// `total_steps` steps; the load of each step is the mean over the interval before it.
 std::vector<fem::SensorReadings> femAloneHistory(const fs::path& study_file, int total_steps, std::size_t rows) {
   const study::Study study = study::loadStudy(study_file);
   const auto& tool = study.tools[0];
   const fem::ReducedModel model = fem::reduce(fem::buildFullModel(tool));
   fem::ThreeLevelIntegrator integrator(model, study.fem.dt_s, {tool.fem.alpha_s, tool.fem.beta_per_s});
   const fem::Sensors sensors(model, tool.constraints.sensor_from_top_m);
-  std::vector<int> tip;
-  for (int k = 0; k < model.keypointCount(); ++k)
-    if (model.keypoints(k, 1) < 1e-9) tip.push_back(k);
-  REQUIRE(tip.size() == 10);  // 5 keypoints across the 20 mm width, both faces
-  const double w = 2 * std::numbers::pi * kFrequencyHz, dt = study.fem.dt_s;
-  integrator.start(Eigen::VectorXd::Zero(model.dofCount()));
+  adapter::TestLoad load;
+  load.force_N = kForceN;
+  load.frequency_Hz = kFrequencyHz;
+  const auto harmonic = adapter::makeTestBackend("harmonic", study.tools, load);
+  const std::vector<int> match = fem::matchKeypoints(model, harmonic->nodePositions(tool.name), 1e-9);
+  const auto toModel = [&](const adapter::NodeArray& f) {
+    Eigen::VectorXd v(model.dofCount());
+    for (std::size_t i = 0; i < match.size(); ++i)
+      for (int c = 0; c < 3; ++c) v[3 * match[i] + c] = f[3 * i + c];
+    return v;
+  };
+  integrator.start(toModel(harmonic->nodeForces(tool.name, adapter::ForceMode::Instantaneous)));
   std::vector<fem::SensorReadings> history;
   for (int i = 0; i < total_steps; ++i) {
-    Eigen::VectorXd f = Eigen::VectorXd::Zero(model.dofCount());
-    if (i > 0) {
-      const double a = (i - 1) * dt, b = i * dt, mean_sin = (std::cos(w * a) - std::cos(w * b)) / (w * (b - a));
-      for (const int k : tip)
-        f[3 * k + 2] = kForceN / static_cast<double>(tip.size()) * (1 + model.keypoints(k, 0) / tool.geometry.width_m) * mean_sin;
-    }
-    const auto& u = integrator.step(f);
+    const auto& u = integrator.step(toModel(harmonic->nodeForces(tool.name)));
+    harmonic->simulate(study.fem.dt_s);
     if (static_cast<std::size_t>(total_steps - i) <= rows) history.push_back(sensors.read(u, integrator.reactions()));
   }
   return history;
 }
 
 // Runs demfem-fem for `total_steps` against the server started by `server_args` (which must write
-// its endpoint to ENDPOINT_FILE, substituted), and checks its sensor history against the FEM alone.
-void checkAgainstFemAlone(const fs::path& dir, const fs::path& study_file, std::vector<std::string> server_args) {
+// its endpoint to ENDPOINT_FILE, substituted), and checks its sensor history against the FEM alone
+// to `tolerance` relative to each column's largest value.
+void checkAgainstFemAlone(const fs::path& dir, const fs::path& study_file, std::vector<std::string> server_args,
+                          double tolerance) {
   const int total_steps = 160;
   const fs::path endpoint_file = dir / "server.endpoint";
   for (auto& a : server_args)
@@ -103,14 +107,19 @@ void checkAgainstFemAlone(const fs::path& dir, const fs::path& study_file, std::
     tilt_scale = std::max(tilt_scale, std::abs(r.tip_tilt_deg));
   }
   REQUIRE(force_scale > 0.1);  // the load reached the load cell: the comparison is not vacuous
-  // Tolerance 1e-12 relative to each column's largest value (arrays travel bit-exact; only the
-  // evaluation order of the closed-form load differs).
   const double dt = study::loadStudy(study_file).fem.dt_s;
+  double worst_force = 0, worst_deformation = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    worst_force = std::max(worst_force, std::abs(rows[i][2] - reference[i].load_cell_N));
+    worst_deformation = std::max(worst_deformation, std::abs(rows[i][3] - reference[i].deformation_mm));
+  }
+  INFO("largest differences: force " << worst_force << " N of " << force_scale << " N, deformation " << worst_deformation
+                                     << " mm of " << deformation_scale << " mm");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     CHECK(rows[i][0] == Approx(static_cast<double>(i + 1) * dt).margin(1e-12));
-    CHECK(std::abs(rows[i][2] - reference[i].load_cell_N) <= 1e-12 * force_scale);
-    CHECK(std::abs(rows[i][3] - reference[i].deformation_mm) <= 1e-12 * deformation_scale);
-    CHECK(std::abs(rows[i][4] - reference[i].tip_tilt_deg) <= 1e-12 * tilt_scale);
+    CHECK(std::abs(rows[i][2] - reference[i].load_cell_N) <= tolerance * force_scale);
+    CHECK(std::abs(rows[i][3] - reference[i].deformation_mm) <= tolerance * deformation_scale);
+    CHECK(std::abs(rows[i][4] - reference[i].tip_tilt_deg) <= tolerance * tilt_scale);
   }
   const auto sidecar = nlohmann::json::parse(readText(dir / "out" / "sensors.json"));
   CHECK(sidecar["complete"] == true);
@@ -124,7 +133,8 @@ TEST_CASE("coupled run against the harmonic backend over tcp equals the FEM alon
   const fs::path study_file = fastQuickStudy(dir);
   std::vector<std::string> server{app("demfem-dem"), "--bind", "tcp://127.0.0.1:*", "--endpoint-file", "ENDPOINT_FILE"};
   for (const auto& a : harmonicArgs(study_file)) server.push_back(a);
-  checkAgainstFemAlone(dir, study_file, server);
+  // 1e-12: the arrays travel bit-exact, so the coupled run must reproduce the FEM alone to rounding.
+  checkAgainstFemAlone(dir, study_file, server, 1e-12);
   fs::remove_all(dir);
 }
 
@@ -134,7 +144,12 @@ TEST_CASE("the Python adapter example serves demfem-fem and matches the FEM alon
   checkAgainstFemAlone(dir, study_file,
                        {"/usr/bin/python3", (sourceDir() / "examples" / "python_adapter" / "harmonic_server.py").string(),
                         "--study", study_file.string(), "--bind", "tcp://127.0.0.1:*", "--endpoint-file", "ENDPOINT_FILE",
-                        "--force-N", std::to_string(kForceN), "--frequency-Hz", std::to_string(kFrequencyHz)});
+                        "--force-N", std::to_string(kForceN), "--frequency-Hz", std::to_string(kFrequencyHz)},
+                       // numpy's sin may differ from libm's in the last bit, and the load-cell
+                       // reaction recursion (Eq 10, a neutral period-3 mode) keeps such differences:
+                       // measured 2.5e-12 relative after 160 steps; 1e-9 leaves margin, still far
+                       // below any physical effect.
+                       1e-9);
   fs::remove_all(dir);
 }
 
