@@ -53,7 +53,7 @@ struct DemMaterial {
   double density_kg_m3 = 0;
   double youngs_Pa = 0;
   double poisson = 0;
-  double yield_Pa = 0;  // EDEM hysteretic spring: K1 = 5 R* min(Y_i, Y_j); 0 = not used
+  double yield_Pa = 0;  // EDEM hysteretic spring: K1 = 5 R* min(Y_i, Y_j); 0 = not limiting (walls)
   bool operator==(const DemMaterial&) const = default;
 };
 
@@ -198,7 +198,7 @@ struct DemSettings {
   double dt_fraction = 0.2;          // of the chosen criterion's critical step
   std::optional<double> dt_s;        // explicit step, overrides the criterion
   int threads = 1;
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1;             // draws during the run; deposition: soil.deposition_seed
   bool operator==(const DemSettings&) const = default;
 };
 
