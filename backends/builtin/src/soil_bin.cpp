@@ -16,7 +16,7 @@ namespace {
 constexpr char kSoilMagic[8] = {'D', 'F', 'S', 'O', 'I', 'L', '0', '1'};
 constexpr double kSettledPacking = 0.60;     // solid fraction assumed to size each stage's batch
 constexpr double kLatticeGap = 1.10;          // insertion lattice spacing / d_max
-constexpr double kStageTimeCap_s = 3.0;       // simulated settling time cap per stage
+constexpr double kStageTimeCap_s = 1.5;       // simulated settling time cap per stage
 constexpr int kEnergyCheckSteps = 200;        // steps between kinetic-energy checks
 }  // namespace
 

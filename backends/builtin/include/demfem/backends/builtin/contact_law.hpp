@@ -14,9 +14,12 @@
 // Formulas and sources
 // - EDEM hysteretic spring (Walton & Braun 1986, as EDEM documents it): loading stiffness
 //   K1 = 5 R* min(Y_i, Y_j) (a yield strength of 0 means "not limiting": walls use the particle's), unloading K2 = K1 / e^2, Fn = max(0, min(K1 delta, K2 (delta - delta0))),
-//   delta0 = delta_max (1 - K1/K2). Dissipation is the hysteresis alone (restitution = e exactly);
-//   documented assumption: the Table 2 "damping factor" D_n acts on the tangential spring only,
-//   c_t = 2 D_n sqrt(m* k_t), and the "stiffness factor" gives k_t = stiffness_factor * K1.
+//   delta0 = delta_max (1 - K1/K2). Documented assumptions for Table 2's factors: the "damping
+//   factor" D_n adds a viscous force c vn with c = 2 D_n sqrt(m* k) of the branch in use (K1 while
+//   loading, K2 while un/reloading; none in the plastic gap delta <= delta0; the total is clamped at
+//   0) and c_t = 2 D_n sqrt(m* k_t) on the tangential spring; the "stiffness factor" gives
+//   k_t = stiffness_factor * K1. With D_n = 0 the restitution is e exactly (hysteresis alone);
+//   without any normal damping a settled packing keeps vibrating on the elastic K2 branch.
 // - EDEM linear cohesion: Fn_coh = -k_coh A. Documented assumption (the vendor's V2 model uses a
 //   smaller area than V1): A = pi R* delta, the Hertzian contact area, half the geometric overlap
 //   circle used by V1 and by LIGGGHTS sjkr.
@@ -78,7 +81,7 @@ inline ContactStiffness contactStiffness(const study::ContactModel& model, const
   if (model.normal == study::NormalModel::EdemHysteretic) {
     s.kn = 5.0 * reff * law.yield_min_Pa;
     s.kt = model.stiffness_factor * s.kn;
-    s.gamma_n = 0;
+    s.gamma_n = 2.0 * model.damping_factor * std::sqrt(meff * s.kn);  // on the K1 branch
     s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
   } else {
     const double v = model.characteristic_velocity_m_s;
@@ -159,9 +162,12 @@ inline double normalForce(const study::ContactModel& model, const PairLaw& law, 
   } else if constexpr (N == study::NormalModel::EdemHysteretic) {
     // Walton-Braun: loading K1, unloading/reloading K2 = K1/e^2 from delta0 = delta_max (1 - e^2).
     if (delta > *delta_max) *delta_max = delta;
-    const double k2 = s.kn / (law.restitution * law.restitution);
-    const double delta0 = *delta_max * (1.0 - law.restitution * law.restitution);
-    return std::max(0.0, std::min(s.kn * delta, k2 * (delta - delta0)));
+    const double e = law.restitution;
+    const double loading = s.kn * delta;
+    const double unloading = s.kn / (e * e) * (delta - *delta_max * (1.0 - e * e));
+    if (loading <= unloading) return std::max(0.0, loading - s.gamma_n * k.vn);
+    if (unloading <= 0) return 0.0;                                    // plastic gap
+    return std::max(0.0, unloading - s.gamma_n / e * k.vn);            // sqrt(K2/K1) = 1/e
   } else {
     // LIGGGHTS hooke/hysteresis (Luding's elasto-plastic adhesive spring).
     const double kn = s.kn;
