@@ -96,8 +96,8 @@ TEST_CASE("two runs with the same inputs and thread count are bit-identical", "[
     INFO("threads " << threads);
     DemSimulation a = settlingBox(threads, cohesiveRolling());
     DemSimulation b = settlingBox(threads, cohesiveRolling());
-    a.run(1500);
-    b.run(1500);
+    a.run(600);
+    b.run(600);
     const auto xa = positions(a), xb = positions(b);
     REQUIRE(xa.size() == xb.size());
     CHECK(std::memcmp(xa.data(), xb.data(), xa.size() * sizeof(double)) == 0);
