@@ -48,6 +48,13 @@ constexpr double kGravity = 9.81;
 constexpr double kSettleCheck_s = 0.01;
 constexpr double kSettleLimit_s = 20.0;
 
+// A number in a LIGGGHTS command, without loss (std::to_string keeps 6 decimals only).
+std::string exact(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
 void finalizeMpi() {
   int finalized = 0;
   MPI_Finalized(&finalized);
@@ -201,6 +208,11 @@ class Engine {
   const ToolState& tool(std::size_t g) const { return tools_[g]; }
 
   void simulate(long long steps) {
+    if (steps == 0) {  // refreshes derived data only; the last interval's forces stay as they are
+      if (mesh_edited_) command("run 0 pre yes post no");
+      mesh_edited_ = false;
+      return;
+    }
     for (auto& tool : tools_) {
       std::fill(tool.force_sum.begin(), tool.force_sum.end(), 0.0);
       std::fill(tool.force_last.begin(), tool.force_last.end(), 0.0);
@@ -290,7 +302,7 @@ class Engine {
     const std::string id = "tool" + std::to_string(g);
     const char* axes[3] = {"_vx", "_vy", "_vz"};
     for (int c = 0; c < 3; ++c)
-      command("variable " + id + axes[c] + " equal " + std::to_string(motion.velocity_m_s[static_cast<std::size_t>(c)]));
+      command("variable " + id + axes[c] + " equal " + exact(motion.velocity_m_s[static_cast<std::size_t>(c)]));
   }
 
  private:
@@ -348,22 +360,13 @@ class Engine {
       deposit(study, deck);
       for (const auto& line : deck.tool_clearance) command(line);
     } else {
-      const auto materials = study.soil.layers;
       for (std::size_t p = 0; p < options.probes.size(); ++p) {
         const auto& probe = options.probes[p];
-        int type = 1;
-        for (std::size_t l = 0, next = 1; l < materials.size(); ++l) {
-          // types follow first appearance of a material in soil.layers (input_deck.hpp)
-          bool first = std::none_of(materials.begin(), materials.begin() + static_cast<long>(l),
-                                    [&](const study::Layer& o) { return o.material == materials[l].material; });
-          if (!first) continue;
-          if (materials[l].material == probe.material) type = static_cast<int>(next);
-          ++next;
-        }
-        command("create_atoms " + std::to_string(type) + " single " + std::to_string(probe.centre_m[0]) + " " +
-                std::to_string(probe.centre_m[1]) + " " + std::to_string(probe.centre_m[2]) + " units box");
-        command("set atom " + std::to_string(p + 1) + " diameter " + std::to_string(2 * probe.radius_m) +
-                " density " + std::to_string(study.material(probe.material).density_kg_m3));
+        const int type = atomType(study, probe.material);
+        command("create_atoms " + std::to_string(type) + " single " + exact(probe.centre_m[0]) + " " +
+                exact(probe.centre_m[1]) + " " + exact(probe.centre_m[2]) + " units box");
+        command("set atom " + std::to_string(p + 1) + " diameter " + exact(2 * probe.radius_m) + " density " +
+                exact(study.material(probe.material).density_kg_m3));
       }
     }
 

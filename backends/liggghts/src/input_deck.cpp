@@ -196,6 +196,13 @@ double sphereMass(const study::Study& study, const std::string& material, double
 
 }  // namespace
 
+int atomType(const study::Study& study, const std::string& material) {
+  const auto materials = typeMaterials(study);
+  if (std::find(materials.begin(), materials.end(), material) == materials.end())
+    throw CouplingError(ErrorCode::BadRequest, "material \"" + material + "\" is not used by the study's layers, bin or tools");
+  return typeOf(materials, material);
+}
+
 double hookeNormalStiffness(double youngs_i_Pa, double poisson_i, double youngs_j_Pa, double poisson_j,
                             double radius_i_m, double radius_j_m, double mass_i_kg, double mass_j_kg,
                             double characteristic_velocity_m_s) {

@@ -57,6 +57,10 @@ double hookeNormalStiffness(double youngs_i_Pa, double poisson_i, double youngs_
                             double radius_i_m, double radius_j_m, double mass_i_kg, double mass_j_kg,
                             double characteristic_velocity_m_s);
 
+// The LIGGGHTS atom type (1-based) of a material under the ordering above; throws BadRequest for a
+// material that is not used by the study's layers, bin or tools.
+int atomType(const study::Study& study, const std::string& material);
+
 // Bin position of tool i's local origin at the start (after deposition): centred across the bin,
 // tip one largest particle diameter above the settled surface (soil.fill_height_m), front face at
 // motion.start_z_m. The client inserts the tool to its depth (setRigidMotion), as the FEM client does.
