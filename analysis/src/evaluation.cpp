@@ -131,14 +131,18 @@ EvaluatedRun evaluateSoilBinRun(const Recording& rec, const EvaluationSettings& 
   }
 
   const auto& x = run.curve.displacement_mm;
+  const auto [x_min, x_max] = std::minmax_element(x.begin(), x.end());
+  const double slack = 0.01 * (settings.window_end_mm - settings.window_begin_mm);
+  if (*x_min > settings.window_begin_mm + slack || *x_max < settings.window_end_mm - slack)
+    throw InputError(file + ": the run covers " + fmt(*x_min) + "-" + fmt(*x_max) + " mm of tool displacement but the statistics window is " +
+                     fmt(settings.window_begin_mm) + "-" + fmt(settings.window_end_mm) +
+                     " mm (a run that stopped early; choose a window it covers with --window-begin-mm/--window-end-mm)");
   run.window.force_N = windowStatistics(x, run.curve.force_N, settings.window_begin_mm, settings.window_end_mm);
   run.window.deformation_mm = windowStatistics(x, run.curve.deformation_mm, settings.window_begin_mm, settings.window_end_mm);
-  if (run.window.force_N.samples < settings.min_window_samples) {
-    const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  if (run.window.force_N.samples < settings.min_window_samples)
     throw InputError(file + ": only " + std::to_string(run.window.force_N.samples) + " samples in the window " + fmt(settings.window_begin_mm) +
                      "-" + fmt(settings.window_end_mm) + " mm (need " + std::to_string(settings.min_window_samples) +
-                     "); the evaluated run covers " + fmt(x.empty() ? 0.0 : *lo) + "-" + fmt(x.empty() ? 0.0 : *hi) + " mm of displacement");
-  }
+                     "): the recording is too coarse for the window");
   if (!run.curve.tilt_deg.empty())
     run.window.tilt_deg = windowStatistics(x, run.curve.tilt_deg, settings.window_begin_mm, settings.window_end_mm);
   return run;

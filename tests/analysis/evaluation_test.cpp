@@ -81,9 +81,21 @@ TEST_CASE("a run too short for the statistics window fails naming the file and t
     FAIL("expected an error");
   } catch (const InputError& e) {
     const std::string message = e.what();
-    CHECK_THAT(message, Catch::Contains((dir / "short.csv").string() + ": only 0 samples in the window 100-500 mm"));
-    CHECK_THAT(message, Catch::Contains("covers 0"));
+    CHECK_THAT(message, Catch::Contains((dir / "short.csv").string() + ": the run covers 0."));  // first sample just after the start
+    CHECK_THAT(message, Catch::Contains("-90 mm of tool displacement but the statistics window is 100-500 mm"));
   }
+}
+
+TEST_CASE("a run that covers the window too sparsely fails naming the file", "[analysis]") {
+  TempDir dir("eval-sparse");
+  SoilBinTruth truth;
+  truth.seed = 6;
+  truth.sample_rate_Hz = 0.5;  // one sample every 60 mm of displacement
+  truth.start_time_s = 0.0;
+  truth.rest_after_s = 0.0;
+  const Recording rec = synthesise(truth, RecordingFormat::Calibrated, dir, "sparse");
+  CHECK_THROWS_WITH(evaluateSoilBinRun(rec, EvaluationSettings{}),
+                    Catch::Contains((dir / "sparse.csv").string() + ": only 7 samples in the window 100-500 mm (need 10)"));
 }
 
 TEST_CASE("a run whose deformation never rises has no start", "[analysis]") {

@@ -20,8 +20,9 @@
 // curve is taken as it is.
 //
 // Window statistics: mean and sample standard deviation (n - 1) of force and deformation over the
-// samples with window_begin_mm <= x <= window_end_mm (the paper's 100-500 mm). Fewer than
-// min_window_samples samples in the window is an input error naming the file.
+// samples with window_begin_mm <= x <= window_end_mm (the paper's 100-500 mm). A run that does not
+// cover the window (within 1 % of its length; e.g. a simulation stopped early) or has fewer than
+// min_window_samples samples in it is an input error naming the file.
 //
 // Units: time s, displacement and deformation mm, force N, tilt deg.
 #pragma once
