@@ -196,13 +196,16 @@ int parseDofMask(const std::string& text) {
   return mask;
 }
 
-// Solves A x = b with a factorization of A plus two steps of iterative refinement, so thin-plate
-// round-off (K is ill conditioned) stays near machine precision.
+// Solves A x = b with a factorization of A plus two steps of iterative refinement whose residual is
+// accumulated in extended precision: the thin plate's K is ill conditioned, and refinement in the
+// working precision alone would leave an error of cond(K) * eps.
 template <class Solver, class Matrix>
 Eigen::VectorXd solveRefined(const Solver& solver, const Matrix& A, const Eigen::VectorXd& b) {
   Eigen::VectorXd x = solver.solve(b);
+  const auto A_extended = A.template cast<long double>().eval();
   for (int pass = 0; pass < 2; ++pass) {
-    const Eigen::VectorXd residual = b - A * x;
+    const Eigen::VectorXd residual =
+        (b.cast<long double>() - A_extended * x.cast<long double>()).template cast<double>();
     x += solver.solve(residual);
   }
   if (!x.allFinite()) throw std::runtime_error("static solve failed (non-finite displacement)");
@@ -380,7 +383,7 @@ ReducedModel reduce(const FullModel& model) {
   std::sort(r.constraints.fixed_dofs.begin(), r.constraints.fixed_dofs.end());
   std::sort(r.constraints.load_cell_dofs.begin(), r.constraints.load_cell_dofs.end());
 
-  const Eigen::MatrixXd K_aa = extract(model.K, a_dofs, a_dofs);
+  const SparseMatrix K_aa = extract(model.K, a_dofs, a_dofs);
   const Eigen::MatrixXd M_aa = extract(model.M, a_dofs, a_dofs);
   if (b_dofs.empty()) {
     r.K = K_aa;
@@ -398,13 +401,25 @@ ReducedModel reduce(const FullModel& model) {
     throw std::runtime_error("keypoint reduction: K_bb (the " + std::to_string(b_dofs.size()) +
                              " non-keypoint DOFs) is not positive definite: the condensed nodes form a mechanism");
   // Eq (13): u_b = T_b u_a with T_b = -K_bb^-1 K_ba; T = [I; T_b].
-  const Eigen::MatrixXd K_ba_dense(K_ba);
-  Eigen::MatrixXd T_b = -K_bb_factor.solve(K_ba_dense);
-  // One step of iterative refinement: the thin plate's K_bb is ill conditioned, and Eq (15)
-  // subtracts nearly equal terms, so T_b's round-off would otherwise reach 1e-9 of the response.
-  T_b -= K_bb_factor.solve(K_ba_dense + K_bb * T_b);
-  // Eq (15): K_r = K_aa - K_ab K_bb^-1 K_ba = K_aa + K_ba^T T_b.
-  r.K = K_aa + K_ba.transpose() * T_b;
+  Eigen::MatrixXd T_b = -K_bb_factor.solve(Eigen::MatrixXd(K_ba));
+  // Eq (15): K_r = K_aa - K_ab K_bb^-1 K_ba = K_aa + K_ba^T T_b. For a thin plate this subtracts
+  // nearly equal numbers (membrane-size entries leaving a bending-size result), so T_b gets one step
+  // of iterative refinement and K_r is accumulated with residuals in extended precision, in column
+  // blocks to bound the memory.
+  using ExtendedMatrix = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+  const Eigen::SparseMatrix<long double> K_bb_ext = K_bb.cast<long double>(), K_ba_ext = K_ba.cast<long double>(),
+                                         K_aa_ext = K_aa.cast<long double>();
+  const Eigen::SparseMatrix<long double> K_ab_ext = K_ba_ext.transpose();
+  r.K.resize(T_b.cols(), T_b.cols());
+  constexpr Eigen::Index kBlock = 64;
+  for (Eigen::Index c0 = 0; c0 < T_b.cols(); c0 += kBlock) {
+    const Eigen::Index w = std::min(kBlock, T_b.cols() - c0);
+    const ExtendedMatrix K_ba_block(K_ba_ext.middleCols(c0, w));
+    const Eigen::MatrixXd residual = (-K_ba_block - K_bb_ext * T_b.middleCols(c0, w).cast<long double>()).cast<double>();
+    T_b.middleCols(c0, w) += K_bb_factor.solve(residual);
+    r.K.middleCols(c0, w) =
+        (ExtendedMatrix(K_aa_ext.middleCols(c0, w)) + K_ab_ext * T_b.middleCols(c0, w).cast<long double>()).cast<double>();
+  }
   // M_r = T^T M T = M_aa + M_ab T_b + T_b^T M_ba + T_b^T M_bb T_b. The last term, the only dense
   // product, as Z^T Z with Z = L^T P T_b (M_bb = P^T L L^T P): a symmetric rank-k update, half a GEMM.
   const Eigen::MatrixXd M_ab_T = M_ba.transpose() * T_b;

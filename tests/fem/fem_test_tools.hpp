@@ -99,6 +99,7 @@ inline void checkReducedStaticEqualsFull(const study::Tool& tool) {
   }
   const StaticSolution r = solveStatic(reduced, fa);
   const StaticSolution f = solveStatic(full, expand(full, fa));
+  INFO(tool.name);
   const Eigen::VectorXd ua = restrictToKeypoints(full, f.displacement);
   CHECK((r.displacement - ua).norm() / ua.norm() < 1e-9);
   const Eigen::VectorXd ra = restrictToKeypoints(full, f.reaction);
