@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config
-  libeigen3-dev libsuitesparse-dev
+  libeigen3-dev libsuitesparse-dev libspectra-dev
   libzmq3-dev cppzmq-dev nlohmann-json3-dev
   catch2 libcli11-dev libnlopt-cxx-dev libnlopt-dev
   liggghts libliggghts-dev openmpi-bin libopenmpi-dev
