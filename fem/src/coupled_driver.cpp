@@ -213,11 +213,13 @@ struct CoupledDriver::Impl {
   adapter::RigidMotion motion(bool drag) const {
     const auto& m = tool_.motion;
     const double x = 0.5 * study_.soil.bin_width_m, top = study_.soil.fill_height_m;
+    // start_z is the bin z of the front face (local z = +T/2); the local origin is the mid-plane.
+    const double z = m.start_z_m - 0.5 * tool_.geometry.thickness_m;
     if (!drag) {
       const double v = (m.depth_m + clearance_m_) / (static_cast<double>(insertion_steps_) * dt_);
-      return {{x, top + clearance_m_, m.start_z_m}, {0, -v, 0}, 0.0};
+      return {{x, top + clearance_m_, z}, {0, -v, 0}, 0.0};
     }
-    return {{x, top - m.depth_m, m.start_z_m}, {0, 0, m.velocity_m_s}, static_cast<double>(insertion_steps_) * dt_};
+    return {{x, top - m.depth_m, z}, {0, 0, m.velocity_m_s}, static_cast<double>(insertion_steps_) * dt_};
   }
 
   void start() {
