@@ -217,12 +217,14 @@ struct CoupledDriver::Impl {
     const double z = m.start_z_m - 0.5 * tool_.geometry.thickness_m;
     if (!drag) {
       const double v = (m.depth_m + clearance_m_) / (static_cast<double>(insertion_steps_) * dt_);
-      return {{x, top + clearance_m_, z}, {0, -v, 0}, 0.0};
+      return {{x, top + clearance_m_, z}, {0, -v, 0}, t_start_s_};
     }
-    return {{x, top - m.depth_m, z}, {0, 0, m.velocity_m_s}, static_cast<double>(insertion_steps_) * dt_};
+    return {{x, top - m.depth_m, z}, {0, 0, m.velocity_m_s}, t_start_s_ + static_cast<double>(insertion_steps_) * dt_};
   }
 
   void start() {
+    // The DEM clock need not start at 0 (a settled soil, a restart): motions are timed from it.
+    t_start_s_ = dem().time();
     dem().setRigidMotion(tool_.name, motion(false));
     if (!rigid_) integrator_->start(toFem(dem().nodeForces(tool_.name, adapter::ForceMode::Instantaneous)));
   }
@@ -417,6 +419,7 @@ struct CoupledDriver::Impl {
     last_ = get<SensorReadings>(in);
     if (!in) throw std::runtime_error(file.string() + " is truncated");
     dem().restore(demCheckpoint(s.step));
+    t_start_s_ = dem().time() - static_cast<double>(s.step) * dt_;
     last_checkpoint_step_ = s.step;
     dem().setRigidMotion(tool_.name, motion(s.step >= insertion_steps_));
     if (!rigid_) dem().setNodePositions(tool_.name, deformedPositions(integrator_->displacement()));
@@ -438,6 +441,7 @@ struct CoupledDriver::Impl {
   std::unique_ptr<ThreeLevelIntegrator> integrator_;
   std::unique_ptr<Sensors> sensors_;
   double clearance_m_ = 0;
+  double t_start_s_ = 0;  // DEM time at the start of the insertion
   std::int64_t insertion_steps_ = 0, total_steps_ = 0;
   std::int64_t last_checkpoint_step_ = -1;
   SensorReadings last_;
