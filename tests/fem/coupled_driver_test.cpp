@@ -1,0 +1,87 @@
+// The coupled driver against an in-process analytic backend (no processes, no sockets).
+#include "demfem/adapter/test_backends.hpp"
+#include "demfem/fem/coupled_driver.hpp"
+#include "demfem/study/study.hpp"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+using namespace demfem;
+
+namespace {
+
+// Forwards to a test backend and records every rigid motion the driver sets.
+class RecordingBackend : public adapter::CouplingApi {
+ public:
+  explicit RecordingBackend(std::unique_ptr<adapter::CouplingApi> inner) : inner_(std::move(inner)) {}
+  std::vector<adapter::RigidMotion> motions;
+
+  adapter::BackendInfo info() override { return inner_->info(); }
+  std::vector<adapter::GeometryInfo> geometries() override { return inner_->geometries(); }
+  double time() override { return inner_->time(); }
+  adapter::NodeArray nodePositions(const std::string& g) override { return inner_->nodePositions(g); }
+  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { return inner_->nodeForces(g, m); }
+  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { inner_->setNodePositions(g, x); }
+  void simulate(double d) override { inner_->simulate(d); }
+  adapter::RigidMotion rigidMotion(const std::string& g) override { return inner_->rigidMotion(g); }
+  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override {
+    motions.push_back(m);
+    inner_->setRigidMotion(g, m);
+  }
+  void checkpoint(const std::filesystem::path& f) override { inner_->checkpoint(f); }
+  void restore(const std::filesystem::path& f) override { inner_->restore(f); }
+  void shutdown() override { inner_->shutdown(); }
+
+ private:
+  std::unique_ptr<adapter::CouplingApi> inner_;
+};
+
+// studies/quick.json with a small tool (120 x 20 mm) so the reduction is quick.
+study::Study smallQuickStudy() {
+  std::ifstream in(std::filesystem::path(DEMFEM_SOURCE_DIR) / "studies" / "quick.json");
+  std::stringstream text;
+  text << in.rdbuf();
+  auto doc = nlohmann::json::parse(text.str());
+  doc["tools"][0]["geometry"]["length_mm"] = 120;
+  doc["tools"][0]["geometry"]["width_mm"] = 20;
+  return study::parseStudy(doc.dump(), "quick.json (small tool)");
+}
+
+}  // namespace
+
+TEST_CASE("coupled driver times insertion and drag from the DEM clock, which need not start at zero", "[fem]") {
+  const study::Study study = smallQuickStudy();
+  RecordingBackend dem(adapter::makeTestBackend("constant", study.tools, adapter::TestLoad{}));
+  const double clock_at_start = 0.25;  // e.g. a settled soil resumed at its own time
+  dem.simulate(clock_at_start);
+  REQUIRE(dem.time() == Approx(clock_at_start).margin(1e-12));
+
+  fem::CoupledRunOptions options;
+  options.output_dir = std::filesystem::temp_directory_path() / "demfem-driver-clock-test";
+  std::filesystem::remove_all(options.output_dir);
+  std::filesystem::create_directories(options.output_dir);
+  const auto& motion = study.tools[0].motion;
+  const double dt = study.fem.dt_s;
+  const auto insertion_steps =
+      static_cast<std::int64_t>(std::ceil((motion.depth_m + study.soil.diameter_max_m) / motion.insertion_velocity_m_s / dt - 1e-9));
+  options.max_steps = insertion_steps + 3;
+  fem::CoupledDriver(study, options).run(dem);
+
+  REQUIRE(dem.motions.size() == 2);
+  const auto& insertion = dem.motions.front();
+  const auto& drag = dem.motions.back();
+  // Insertion starts now on the DEM's clock; the drag starts where and when the insertion ends.
+  CHECK(insertion.t0_s == Approx(clock_at_start).margin(1e-12));
+  CHECK(drag.t0_s == Approx(clock_at_start + insertion_steps * dt).margin(1e-12));
+  for (int c = 0; c < 3; ++c)
+    CHECK(insertion.origin_m[c] + insertion.velocity_m_s[c] * (drag.t0_s - insertion.t0_s) ==
+          Approx(drag.origin_m[c]).margin(1e-12));
+  // The drag holds the study's depth below the fill surface and moves at the study's velocity in +z.
+  CHECK(drag.origin_m[1] == Approx(study.soil.fill_height_m - motion.depth_m).margin(1e-12));
+  CHECK(drag.velocity_m_s[2] == Approx(motion.velocity_m_s).margin(1e-12));
+  std::filesystem::remove_all(options.output_dir);
+}
