@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <optional>
 #include <fcntl.h>
 #include <unistd.h>
@@ -165,6 +166,134 @@ void reportLiggghtsExit() {
                command_in_flight->command.c_str(), message.c_str(), command_in_flight->screen.c_str());
 }
 
+// One LIGGGHTS instance on MPI_COMM_WORLD; its screen and log go to `<name>-screen.txt` and
+// `<name>.log` in the work directory, never to our stdout (`-screen none` makes LIGGGHTS 3.8 crash
+// when it reads an STL file).
+class Instance {
+ public:
+  Instance(const std::filesystem::path& work_dir, const std::string& name)
+      : screen_(work_dir / (name + "-screen.txt")) {
+    const std::string screen = screen_.string();
+    const std::string log = (work_dir / (name + ".log")).string();
+    const char* args[] = {"liggghts", "-echo", "none", "-screen", screen.c_str(), "-log", log.c_str()};
+    // Every instance after the first in a process re-registers LIGGGHTS' contact-model styles and
+    // prints hundreds of "Style collision" warnings to stderr: keep them in the work directory.
+    const StderrToFile quiet(work_dir / (name + "-construction.txt"));
+    lmp_ = new LAMMPS_NS::LAMMPS(7, const_cast<char**>(args), MPI_COMM_WORLD);
+  }
+  ~Instance() { delete lmp_; }
+  Instance(const Instance&) = delete;
+  Instance& operator=(const Instance&) = delete;
+
+  LAMMPS_NS::LAMMPS* get() const { return lmp_; }
+
+  // Runs one input command; if LIGGGHTS exits on it, the exit handler names it.
+  void command(const std::string& line) {
+    static const bool handler_registered = std::atexit(reportLiggghtsExit) == 0;
+    (void)handler_registered;
+    CommandInFlight in_flight{line, screen_};
+    command_in_flight = &in_flight;
+    lmp_->input->one(line.c_str());
+    command_in_flight = nullptr;
+  }
+
+  double computeScalar(const char* id) {
+    return *static_cast<double*>(lammps_extract_compute(lmp_, const_cast<char*>(id), 0, 0));
+  }
+
+ private:
+  std::filesystem::path screen_;
+  LAMMPS_NS::LAMMPS* lmp_ = nullptr;
+};
+
+// The settled soil (before the tools clear their space): x, y, z, radius (m) and atom type per
+// particle, kParticleValues doubles each, in the order of their LIGGGHTS ids at the end of the
+// deposition. Every rank holds all of it.
+constexpr std::size_t kParticleValues = 5;
+using SettledParticles = std::vector<double>;
+
+// Settled-soil file: "DFLSOIL1", the 16 hex digits of study::soilHash, the particle count (uint64),
+// then kParticleValues float64 per particle; native byte order (little endian on the platforms
+// Debian builds LIGGGHTS for).
+constexpr char kSoilMagic[8] = {'D', 'F', 'L', 'S', 'O', 'I', 'L', '1'};
+
+void writeSoilFile(const std::filesystem::path& file, const std::string& hash, const SettledParticles& particles) {
+  std::filesystem::create_directories(file.parent_path());
+  // Written under a unique name and renamed: a concurrent run never reads half a file.
+  const std::filesystem::path partial = file.string() + "." + std::to_string(::getpid()) + ".partial";
+  {
+    std::ofstream out(partial, std::ios::binary);
+    const std::uint64_t count = particles.size() / kParticleValues;
+    out.write(kSoilMagic, sizeof kSoilMagic);
+    out.write(hash.data(), static_cast<std::streamsize>(hash.size()));
+    out.write(reinterpret_cast<const char*>(&count), sizeof count);
+    out.write(reinterpret_cast<const char*>(particles.data()), static_cast<std::streamsize>(particles.size() * sizeof(double)));
+    if (!out) throw CouplingError(ErrorCode::Internal, "cannot write the settled soil file " + partial.string());
+  }
+  std::filesystem::rename(partial, file);
+}
+
+SettledParticles readSoilFile(const std::filesystem::path& file, const std::string& hash) {
+  std::ifstream in(file, std::ios::binary);
+  char magic[sizeof kSoilMagic];
+  std::string stored_hash(hash.size(), ' ');
+  std::uint64_t count = 0;
+  in.read(magic, sizeof magic);
+  in.read(stored_hash.data(), static_cast<std::streamsize>(stored_hash.size()));
+  in.read(reinterpret_cast<char*>(&count), sizeof count);
+  const auto fail = [&file](const std::string& what) {
+    return CouplingError(ErrorCode::BadRequest, "settled soil file " + file.string() + ": " + what +
+                                                    "; delete it to deposit the soil again");
+  };
+  if (!in || !std::equal(magic, magic + sizeof magic, kSoilMagic)) throw fail("not a liggghts settled-soil file");
+  if (stored_hash != hash) throw fail("soil hash " + stored_hash + ", the study's is " + hash);
+  const auto expected_bytes = std::filesystem::file_size(file);
+  const auto header_bytes = sizeof kSoilMagic + hash.size() + sizeof count;
+  if (count == 0 || expected_bytes != header_bytes + count * kParticleValues * sizeof(double))
+    throw fail("truncated or damaged (" + std::to_string(count) + " particles announced)");
+  SettledParticles particles(count * kParticleValues);
+  in.read(reinterpret_cast<char*>(particles.data()), static_cast<std::streamsize>(particles.size() * sizeof(double)));
+  if (!in) throw fail("truncated");
+  return particles;
+}
+
+// All particles of an instance, gathered on every rank and ordered by LIGGGHTS id.
+SettledParticles gatherParticles(LAMMPS_NS::LAMMPS* lmp) {
+  const LAMMPS_NS::Atom* atom = lmp->atom;
+  std::vector<double> local;  // id, then the kParticleValues values
+  for (int i = 0; i < atom->nlocal; ++i)
+    local.insert(local.end(), {static_cast<double>(atom->tag[i]), atom->x[i][0], atom->x[i][1], atom->x[i][2],
+                               atom->radius[i], static_cast<double>(atom->type[i])});
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const int local_count = static_cast<int>(local.size());
+  std::vector<int> counts(static_cast<std::size_t>(size)), offsets(static_cast<std::size_t>(size), 0);
+  MPI_Allgather(&local_count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  for (std::size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+  std::vector<double> all(static_cast<std::size_t>(offsets.back() + counts.back()));
+  MPI_Allgatherv(local.data(), local_count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE,
+                 MPI_COMM_WORLD);
+  constexpr std::size_t stride = kParticleValues + 1;
+  std::vector<std::size_t> order(all.size() / stride);
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&all](std::size_t a, std::size_t b) { return all[stride * a] < all[stride * b]; });
+  SettledParticles particles;
+  particles.reserve(order.size() * kParticleValues);
+  for (const std::size_t i : order)
+    particles.insert(particles.end(), all.begin() + static_cast<std::ptrdiff_t>(stride * i + 1),
+                     all.begin() + static_cast<std::ptrdiff_t>(stride * (i + 1)));
+  return particles;
+}
+
+// Rank 0's status of reading the soil file, broadcast so that every rank takes the same branch.
+enum class SoilFileStatus : int { Missing = 0, Loaded = 1, Damaged = 2 };
+
+std::filesystem::path soilDirectory(const BackendOptions& options) {
+  if (!options.soil_directory.empty()) return options.soil_directory;
+  if (const char* dir = std::getenv("DEMFEM_SOIL_DIR"); dir && *dir) return dir;
+  return "soil";
+}
+
 struct ToolState {
   std::string name;
   adapter::PlateSurface surface;
@@ -276,6 +405,8 @@ class Engine {
   }
 
   std::int64_t particleCount() const { return static_cast<std::int64_t>(lmp_->atom->natoms); }
+  SettledParticles particles() const { return gatherParticles(lmp_); }
+  SoilOrigin soilOrigin() const { return {soil_file_, soil_deposited_}; }
 
   void setNodePositions(std::size_t g, const NodeArray& xyz) {
     auto& tool = tools_[g];
@@ -306,18 +437,7 @@ class Engine {
   }
 
  private:
-  void command(const std::string& line) {
-    static const bool handler_registered = std::atexit(reportLiggghtsExit) == 0;
-    (void)handler_registered;
-    CommandInFlight in_flight{line, work_dir_ / "screen.txt"};
-    command_in_flight = &in_flight;
-    lmp_->input->one(line.c_str());
-    command_in_flight = nullptr;
-  }
-
-  double computeScalar(const char* id) {
-    return *static_cast<double*>(lammps_extract_compute(lmp_, const_cast<char*>(id), 0, 0));
-  }
+  void command(const std::string& line) { instance_->command(line); }
 
   void build(const study::Study& study, const BackendOptions& options) {
     const InputDeck deck = translateStudy(study, work_dir_);  // throws before LIGGGHTS sees anything
@@ -342,32 +462,27 @@ class Engine {
       if (!(probe.radius_m > 0)) throw CouplingError(ErrorCode::BadRequest, "probe sphere radius must be positive");
     }
 
-    // LIGGGHTS writes its screen output and log into the work directory, never to our stdout.
-    // (`-screen none` makes LIGGGHTS 3.8 crash when it reads an STL file.)
-    const std::string screen = (work_dir_ / "screen.txt").string();
-    const std::string log = (work_dir_ / "log.liggghts").string();
-    const char* args[] = {"liggghts", "-echo", "none", "-screen", screen.c_str(), "-log", log.c_str()};
-    {
-      // Every instance after the first in a process re-registers LIGGGHTS' contact-model styles and
-      // prints hundreds of "Style collision" warnings to stderr: keep them in the work directory.
-      const StderrToFile quiet(work_dir_ / "construction.txt");
-      lmp_ = new LAMMPS_NS::LAMMPS(7, const_cast<char**>(args), MPI_COMM_WORLD);
-    }
-    for (const auto& line : deck.setup) command(line);
-
     if (options.probes.empty()) {
+      // The settled soil is read from its file or deposited in an instance of its own, so that the
+      // simulation below starts from the same state either way (positions only, at rest).
+      const SettledParticles soil = settledSoil(study, deck, options);
+      openMainInstance(deck);
       command("fix integrate all nve/sphere");
-      deposit(study, deck);
+      std::map<int, double> density_of_type;
+      for (const auto& layer : study.soil.layers)
+        density_of_type[atomType(study, layer.material)] = study.material(layer.material).density_kg_m3;
+      for (std::size_t i = 0; i < soil.size(); i += kParticleValues)
+        addSphere(static_cast<int>(soil[i + 4]), {soil[i], soil[i + 1], soil[i + 2]}, soil[i + 3],
+                  density_of_type.at(static_cast<int>(soil[i + 4])));
+      if (lmp_->atom->natoms != static_cast<LAMMPS_NS::bigint>(soil.size() / kParticleValues))
+        throw CouplingError(ErrorCode::Internal, "LIGGGHTS created " + std::to_string(lmp_->atom->natoms) + " of the " +
+                                                     std::to_string(soil.size() / kParticleValues) + " settled particles");
       for (const auto& line : deck.tool_clearance) command(line);
     } else {
-      for (std::size_t p = 0; p < options.probes.size(); ++p) {
-        const auto& probe = options.probes[p];
-        const int type = atomType(study, probe.material);
-        command("create_atoms " + std::to_string(type) + " single " + exact(probe.centre_m[0]) + " " +
-                exact(probe.centre_m[1]) + " " + exact(probe.centre_m[2]) + " units box");
-        command("set atom " + std::to_string(p + 1) + " diameter " + exact(2 * probe.radius_m) + " density " +
-                exact(study.material(probe.material).density_kg_m3));
-      }
+      openMainInstance(deck);
+      for (const auto& probe : options.probes)
+        addSphere(atomType(study, probe.material), probe.centre_m, probe.radius_m,
+                  study.material(probe.material).density_kg_m3);
     }
 
     for (const auto& line : deck.tools) command(line);
@@ -385,15 +500,70 @@ class Engine {
     mesh_edited_ = false;
   }
 
-  void deposit(const study::Study& study, const InputDeck& deck) {
-    for (const auto& line : deck.deposition) command(line);
+  void openMainInstance(const InputDeck& deck) {
+    instance_ = std::make_unique<Instance>(work_dir_, "main");
+    lmp_ = instance_->get();
+    for (const auto& line : deck.setup) command(line);
+  }
+
+  // Adds a sphere at rest (bin frame, m; kg/m^3). LIGGGHTS numbers the atoms 1, 2, ... in creation order.
+  void addSphere(int type, const Vec3& centre, double radius, double density) {
+    command("create_atoms " + std::to_string(type) + " single " + exact(centre[0]) + " " + exact(centre[1]) + " " +
+            exact(centre[2]) + " units box");
+    command("set atom " + std::to_string(lmp_->atom->natoms) + " diameter " + exact(2 * radius) + " density " +
+            exact(density));
+  }
+
+  // The settled soil of the study: read from soilDirectory()/liggghts-soil-<soilHash>.bin if there,
+  // else deposited in a LIGGGHTS instance of its own and saved there (rank 0 reads and writes).
+  SettledParticles settledSoil(const study::Study& study, const InputDeck& deck, const BackendOptions& options) {
+    const std::string hash = study::soilHash(study);
+    soil_file_ = soilDirectory(options) / ("liggghts-soil-" + hash + ".bin");
+    SettledParticles particles;
+    int status = static_cast<int>(SoilFileStatus::Missing);
+    std::string problem;
+    if (worldRank() == 0 && std::filesystem::exists(soil_file_)) {
+      try {
+        particles = readSoilFile(soil_file_, hash);
+        status = static_cast<int>(SoilFileStatus::Loaded);
+      } catch (const CouplingError& e) {
+        status = static_cast<int>(SoilFileStatus::Damaged);
+        problem = e.what();
+      }
+    }
+    MPI_Bcast(&status, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (status == static_cast<int>(SoilFileStatus::Damaged))
+      throw CouplingError(ErrorCode::BadRequest, worldRank() == 0 ? problem : "rank 0 cannot read " + soil_file_.string());
+    soil_deposited_ = status == static_cast<int>(SoilFileStatus::Missing);
+    if (soil_deposited_) {
+      Instance deposition(work_dir_, "deposition");
+      for (const auto& line : deck.setup) deposition.command(line);
+      deposition.command("fix integrate all nve/sphere");
+      deposit(deposition, study, deck);
+      particles = gatherParticles(deposition.get());
+      if (worldRank() == 0) writeSoilFile(soil_file_, hash, particles);
+      return particles;
+    }
+    auto count = static_cast<std::uint64_t>(particles.size());
+    MPI_Bcast(&count, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    particles.resize(count);
+    MPI_Bcast(particles.data(), static_cast<int>(count), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    return particles;
+  }
+
+  // Inserts the layers and lets them settle under gravity until the translational kinetic energy is
+  // below soil.settle_kinetic_energy_J. Rotational energy is not part of the criterion: a spin about
+  // the contact normal is resisted by none of LIGGGHTS' laws here (no torsional friction), so a
+  // particle can keep drilling in place while the packing is at rest; the saved state has no spin.
+  void deposit(Instance& deposition, const study::Study& study, const InputDeck& deck) {
+    for (const auto& line : deck.deposition) deposition.command(line);
     const auto chunk = std::max<long long>(1, std::llround(kSettleCheck_s / dt_));
     const double fall_time = 2 * std::sqrt(2 * deck.insertion_top_m / kGravity);
     double t = 0;
     while (true) {
-      command("run " + std::to_string(chunk) + " post no");
+      deposition.command("run " + std::to_string(chunk) + " post no");
       t += static_cast<double>(chunk) * dt_;
-      const double energy = computeScalar("kinetic_energy") + computeScalar("rotational_energy");
+      const double energy = deposition.computeScalar("kinetic_energy");
       if (!std::isfinite(energy))
         throw CouplingError(ErrorCode::SimulationFailed, "deposition diverged (kinetic energy is not finite); "
                                                          "reduce dem.dt_fraction or dem.dt_s");
@@ -537,14 +707,17 @@ class Engine {
 
   void release() {
     for (auto& tool : tools_) tool.node_access.reset();
-    delete lmp_;
+    instance_.reset();
     lmp_ = nullptr;
     std::error_code ignored;
     std::filesystem::remove_all(work_dir_, ignored);
   }
 
   std::filesystem::path work_dir_;
-  LAMMPS_NS::LAMMPS* lmp_ = nullptr;
+  std::unique_ptr<Instance> instance_;
+  LAMMPS_NS::LAMMPS* lmp_ = nullptr;  // instance_'s
+  std::filesystem::path soil_file_;
+  bool soil_deposited_ = false;
   std::vector<ToolState> tools_;
   double dt_ = 0;
   LAMMPS_NS::bigint start_step_ = 0;
@@ -711,6 +884,15 @@ class LiggghtsBackend final : public adapter::CouplingApi {
   }
 
   std::int64_t particleCount() { return live().particleCount(); }
+  SoilOrigin soilOrigin() { return live().soilOrigin(); }
+  std::vector<std::array<double, 4>> particles() {
+    if (multipleRanks())
+      throw CouplingError(ErrorCode::Unsupported, "particle positions are only offered on a single MPI rank");
+    const SettledParticles all = live().particles();
+    std::vector<std::array<double, 4>> xyzr;
+    for (std::size_t i = 0; i < all.size(); i += kParticleValues) xyzr.push_back({all[i], all[i + 1], all[i + 2], all[i + 3]});
+    return xyzr;
+  }
 
   void shutdown() override {
     if (!engine_) return;
@@ -755,6 +937,18 @@ std::int64_t particleCount(adapter::CouplingApi& backend) {
   auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
   if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "particleCount: not a liggghts backend");
   return liggghts->particleCount();
+}
+
+SoilOrigin soilOrigin(adapter::CouplingApi& backend) {
+  auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
+  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "soilOrigin: not a liggghts backend");
+  return liggghts->soilOrigin();
+}
+
+std::vector<std::array<double, 4>> particles(adapter::CouplingApi& backend) {
+  auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
+  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "particles: not a liggghts backend");
+  return liggghts->particles();
 }
 
 bool isLeaderRank() {

@@ -41,7 +41,9 @@ struct Setup {
     p.centre_m = {origin[0] + centre_local[0], origin[1] + centre_local[1], origin[2] + centre_local[2]};
     p.radius_m = kRadius;
     p.material = "soil";
-    return {{p}};
+    liggghts::BackendOptions options;
+    options.probes = {p};
+    return options;
   }
   double mass() const { return 2600 * 4.0 / 3.0 * std::numbers::pi * std::pow(kRadius, 3); }
   // LIGGGHTS 3.8 hooke (normal_model_hooke.h), sphere on a wall: R* = R, m* = m, Y* from both materials.

@@ -5,8 +5,14 @@
 // - The study is translated by translateStudy() (input_deck.hpp) and checked before any command
 //   reaches LIGGGHTS: LIGGGHTS stops the process on an input error, so what it would reject is
 //   reported here as adapter::CouplingError instead.
-// - Construction deposits the soil (insert, settle under gravity until the kinetic energy falls below
-//   soil.settle_kinetic_energy_J), removes the particles in the tools' way and puts the tools at
+// - Construction takes the settled soil from BackendOptions::soil_directory (default: $DEMFEM_SOIL_DIR,
+//   else ./soil) / liggghts-soil-<study::soilHash>.bin, or, without that file, deposits it (insert,
+//   settle under gravity until the translational kinetic energy falls below
+//   soil.settle_kinetic_energy_J) in a LIGGGHTS instance of its own and writes the file. Either way
+//   the simulation starts from the file's particles at rest (positions, radii, types; no contact
+//   history), so a run gives the same numbers whether its soil was cached or not. A damaged file or
+//   one of another soil is an error (BadRequest naming it), never silently replaced. Then the
+//   particles in the tools' way are removed and the tools put at
 //   their start positions (toolStartOrigin(), velocity zero); time() is 0 after it. With
 //   BackendOptions::probes set, the soil is replaced by fixed probe spheres (no deposition, no time
 //   integration of particles).
@@ -24,6 +30,7 @@
 
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,6 +47,15 @@ struct ProbeSphere {
 struct BackendOptions {
   // Empty: deposit the study's soil. Otherwise: only these fixed spheres (contact-law checks).
   std::vector<ProbeSphere> probes;
+  // Where settled soils are kept; empty: $DEMFEM_SOIL_DIR if set, else "soil" in the working directory.
+  std::filesystem::path soil_directory;
+};
+
+// The settled-soil file of a backend and whether its construction deposited the soil and wrote the
+// file (true) or read it (false). Empty file for a probe backend.
+struct SoilOrigin {
+  std::filesystem::path file;
+  bool deposited = false;
 };
 
 // Builds the DEM simulation of `study` (soil, bin, tools at their start positions) ready for the
@@ -55,6 +71,13 @@ std::array<double, 3> meshTotalForce(adapter::CouplingApi& backend, const std::s
 
 // Number of particles in the simulation (all ranks). Throws BadRequest as meshTotalForce().
 std::int64_t particleCount(adapter::CouplingApi& backend);
+
+// Where the backend's settled soil came from. Throws BadRequest as meshTotalForce().
+SoilOrigin soilOrigin(adapter::CouplingApi& backend);
+
+// Every particle's centre and radius (x, y, z, r in m, bin frame) in LIGGGHTS id order. Single MPI
+// rank only (Unsupported otherwise); throws BadRequest as meshTotalForce().
+std::vector<std::array<double, 4>> particles(adapter::CouplingApi& backend);
 
 // MPI (`mpirun -np N demfem-dem --backend liggghts ...`): every rank runs demfem-dem. The leader
 // (rank 0) serves the protocol and calls the backend built by makeBackend(); every other rank calls
