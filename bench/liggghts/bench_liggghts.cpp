@@ -4,7 +4,9 @@
 // draught force over the same drag window with its scatter over the seeds. Deposition and insertion
 // are not timed. Prints a table; --json writes the same numbers.
 //
-// The LIGGGHTS 2-rank runs start this program again under `mpirun -np 2` in worker mode (--worker).
+// Every LIGGGHTS run starts this program again under `mpirun -np N` in worker mode (--worker), so that
+// this process never initialises MPI: an MPI singleton's environment, inherited by a child mpirun,
+// makes that mpirun fail (the 2-rank runs failed so before).
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/liggghts/backend.hpp"
@@ -94,7 +96,7 @@ RunResult runBuiltin(const std::string& file, std::uint64_t seed, int cores, dou
   return r;
 }
 
-// Rank 0 of a LIGGGHTS run (in-process for 1 rank, under mpirun for more); followers return {}.
+// Rank 0 of a LIGGGHTS run (the worker under mpirun); followers return {}.
 std::optional<RunResult> runLiggghts(const std::string& file, std::uint64_t seed, double window_s) {
   const auto s = benchStudy(file, seed, 1);
   if (!liggghts::isLeaderRank()) {
@@ -118,6 +120,8 @@ RunResult runLiggghtsRanks(const std::string& file, std::uint64_t seed, int rank
   std::snprintf(window, sizeof window, "%.17g", window_s);
   char settle[64];
   std::snprintf(settle, sizeof settle, "%.17g", g_settle_kinetic_energy_J);
+  // --oversubscribe: the ranks may outnumber the cores mpirun counts; running as root (containers)
+  // needs OpenMPI's explicit consent.
   const std::string command = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") +
                               DEMFEM_MPIEXEC + " -np " + std::to_string(ranks) + " --oversubscribe '" + self.string() +
                               "' --study '" + file + "' --worker " + std::to_string(seed) + " --window-s " + window +
@@ -162,7 +166,7 @@ int main(int argc, char** argv) {
   app.add_option("--window-s", window_s, "Simulated drag time that is timed and averaged (s)")
       ->check(CLI::PositiveNumber);
   app.add_option("--settle-kinetic-energy-J", g_settle_kinetic_energy_J,
-                 "Deposition ends below this total kinetic energy (J), both backends")
+                 "Deposition ends below this kinetic energy (J), both backends (LIGGGHTS: translational only)")
       ->check(CLI::PositiveNumber);
   app.add_option("--worker", worker_seed, "Internal: run LIGGGHTS with this seed as an MPI job and write --json");
   std::string& json_target = cli::addJsonOption(app);
@@ -181,26 +185,32 @@ int main(int argc, char** argv) {
                   static_cast<long long>(r.steps), r.wall_s, r.particleStepsPerSecond(), r.draught_N);
       std::fflush(stdout);
     };
-    for (int seed = 1; seed <= seeds; ++seed) {
-      record(runBuiltin(file, static_cast<std::uint64_t>(seed), 1, window_s));
-      record(*runLiggghts(file, static_cast<std::uint64_t>(seed), window_s));
-    }
-    record(runBuiltin(file, 1, 2, window_s));
-    record(runLiggghtsRanks(file, 1, 2, window_s));
+    for (int seed = 1; seed <= seeds; ++seed)
+      for (int cores : {1, 2}) {
+        record(runBuiltin(file, static_cast<std::uint64_t>(seed), cores, window_s));
+        record(runLiggghtsRanks(file, static_cast<std::uint64_t>(seed), cores, window_s));
+      }
 
+    // Per backend and core count: speed and draught, mean and sample standard deviation over seeds.
     nlohmann::json summary = nlohmann::json::object();
-    for (const std::string backend : {"builtin", "liggghts"}) {
-      std::vector<double> draught;
-      for (const auto& r : runs)
-        if (r.backend == backend && r.cores == 1) draught.push_back(r.draught_N);
-      const Summary d = summarise(draught);
-      std::printf("%-9s draught over %d seeds: %.4f +- %.4f N (1 core)\n", backend.c_str(), seeds, d.mean, d.stddev);
-      summary[backend] = {{"draught_mean_N", d.mean}, {"draught_stddev_N", d.stddev}};
-    }
     for (int cores : {1, 2}) {
       double speed[2] = {0, 0};
-      for (const auto& r : runs)
-        if (r.cores == cores && r.seed == 1) speed[r.backend == "builtin" ? 0 : 1] = r.particleStepsPerSecond();
+      for (const std::string backend : {"builtin", "liggghts"}) {
+        std::vector<double> draught, rate;
+        for (const auto& r : runs)
+          if (r.backend == backend && r.cores == cores) {
+            draught.push_back(r.draught_N);
+            rate.push_back(r.particleStepsPerSecond());
+          }
+        const Summary d = summarise(draught), v = summarise(rate);
+        speed[backend == "builtin" ? 0 : 1] = v.mean;
+        std::printf("%-9s %d core(s), %d seeds: %.3e +- %.1e particle-steps/s, draught %.4f +- %.4f N\n",
+                    backend.c_str(), cores, seeds, v.mean, v.stddev, d.mean, d.stddev);
+        summary[backend + "_" + std::to_string(cores) + "_cores"] = {{"particle_steps_per_s_mean", v.mean},
+                                                                   {"particle_steps_per_s_stddev", v.stddev},
+                                                                   {"draught_mean_N", d.mean},
+                                                                   {"draught_stddev_N", d.stddev}};
+      }
       std::printf("speed ratio liggghts / builtin on %d core(s): %.3f\n", cores, speed[1] / speed[0]);
       summary["speed_ratio_liggghts_over_builtin_" + std::to_string(cores) + "_cores"] = speed[1] / speed[0];
     }
