@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <unistd.h>
 
 namespace {
@@ -35,13 +36,28 @@ struct RunResult {
   std::int64_t steps = 0;
   double wall_s = 0;
   double draught_N = 0;  // mean force on the tool against the drag (-z), over the window
+  double surface_mm = std::numeric_limits<double>::quiet_NaN();  // soilSurface() of the run's soil
   double particleStepsPerSecond() const { return static_cast<double>(particles) * static_cast<double>(steps) / wall_s; }
 };
 
 nlohmann::json toJson(const RunResult& r) {
   return {{"backend", r.backend}, {"cores", r.cores},      {"seed", r.seed},
           {"particles", r.particles}, {"steps", r.steps}, {"wall_s", r.wall_s},
-          {"draught_N", r.draught_N}, {"particle_steps_per_s", r.particleStepsPerSecond()}};
+          {"draught_N", r.draught_N}, {"particle_steps_per_s", r.particleStepsPerSecond()},
+          {"surface_mm", r.surface_mm}};
+}
+
+// Height of the settled soil's surface (mm above the floor): the mean top (y + r) of the particles
+// whose top lies within one largest diameter of the highest top. The tool's depth is measured from
+// the study's fill height, so a surface above it means a deeper cut.
+double soilSurface_mm(const std::vector<std::array<double, 2>>& y_and_radius, double diameter_max_m) {
+  double highest = 0;
+  for (const auto& p : y_and_radius) highest = std::max(highest, p[0] + p[1]);
+  double sum = 0;
+  int count = 0;
+  for (const auto& p : y_and_radius)
+    if (p[0] + p[1] > highest - diameter_max_m) sum += p[0] + p[1], ++count;
+  return 1e3 * sum / count;
 }
 
 // The study both backends run: the file's soil and tool with the LIGGGHTS-compatible contact law.
@@ -90,8 +106,11 @@ RunResult runBuiltin(const std::string& file, std::uint64_t seed, int cores, dou
   const auto s = benchStudy(file, seed, cores);
   auto dem = builtin::makeBackend(s);
   const auto soil_file = builtin::soilFile(s, builtin::defaultSoilDirectory());
-  const auto particles = static_cast<std::int64_t>(builtin::readSettledSoil(soil_file).particles.size());
-  RunResult r = drag(*dem, s, window_s, particles);
+  const auto settled = builtin::readSettledSoil(soil_file).particles;
+  std::vector<std::array<double, 2>> y_and_radius;
+  for (const auto& p : settled) y_and_radius.push_back({p.x[1], p.radius});
+  RunResult r = drag(*dem, s, window_s, static_cast<std::int64_t>(settled.size()));
+  r.surface_mm = soilSurface_mm(y_and_radius, s.soil.diameter_max_m);
   r.backend = "builtin", r.cores = cores, r.seed = seed;
   return r;
 }
@@ -104,9 +123,13 @@ std::optional<RunResult> runLiggghts(const std::string& file, std::uint64_t seed
     return std::nullopt;
   }
   auto dem = liggghts::makeBackend(s);
-  RunResult r = drag(*dem, s, window_s, liggghts::particleCount(*dem));
   int ranks = 1;
   if (const char* size = std::getenv("OMPI_COMM_WORLD_SIZE")) ranks = std::atoi(size);
+  std::vector<std::array<double, 2>> y_and_radius;
+  if (ranks == 1)  // particle positions are offered on one rank; 2-rank runs read the same soil file
+    for (const auto& p : liggghts::particles(*dem)) y_and_radius.push_back({p[1], p[3]});
+  RunResult r = drag(*dem, s, window_s, liggghts::particleCount(*dem));
+  if (ranks == 1) r.surface_mm = soilSurface_mm(y_and_radius, s.soil.diameter_max_m);
   r.backend = "liggghts", r.cores = ranks, r.seed = seed;
   dem->shutdown();
   return r;
@@ -134,6 +157,7 @@ RunResult runLiggghtsRanks(const std::string& file, std::uint64_t seed, int rank
   RunResult r;
   r.backend = j.at("backend"), r.cores = j.at("cores"), r.seed = j.at("seed"), r.particles = j.at("particles");
   r.steps = j.at("steps"), r.wall_s = j.at("wall_s"), r.draught_N = j.at("draught_N");
+  if (!j.at("surface_mm").is_null()) r.surface_mm = j.at("surface_mm");
   return r;
 }
 
@@ -175,13 +199,13 @@ int main(int argc, char** argv) {
       if (const auto r = runLiggghts(file, worker_seed, window_s)) cli::writeJson(json_target, toJson(*r));
       return;
     }
-    std::printf("%-9s %5s %5s %9s %8s %9s %14s %11s\n", "backend", "cores", "seed", "particles", "steps", "wall_s",
-                "particle-st/s", "draught_N");
+    std::printf("%-9s %5s %5s %9s %10s %8s %9s %14s %11s\n", "backend", "cores", "seed", "particles", "surface_mm",
+                "steps", "wall_s", "particle-st/s", "draught_N");
     std::vector<RunResult> runs;
     auto record = [&runs](const RunResult& r) {  // one row as soon as a run ends: runs are long
       runs.push_back(r);
-      std::printf("%-9s %5d %5llu %9lld %8lld %9.2f %14.3e %11.4f\n", r.backend.c_str(), r.cores,
-                  static_cast<unsigned long long>(r.seed), static_cast<long long>(r.particles),
+      std::printf("%-9s %5d %5llu %9lld %10.2f %8lld %9.2f %14.3e %11.4f\n", r.backend.c_str(), r.cores,
+                  static_cast<unsigned long long>(r.seed), static_cast<long long>(r.particles), r.surface_mm,
                   static_cast<long long>(r.steps), r.wall_s, r.particleStepsPerSecond(), r.draught_N);
       std::fflush(stdout);
     };
