@@ -540,6 +540,7 @@ class Engine {
       for (const auto& line : deck.setup) deposition.command(line);
       deposition.command("fix integrate all nve/sphere");
       deposit(deposition, study, deck);
+      for (const auto& line : deck.trim) deposition.command(line);
       particles = gatherParticles(deposition.get());
       if (worldRank() == 0) writeSoilFile(soil_file_, hash, particles);
       return particles;

@@ -15,7 +15,9 @@
 //   by writeToolStl), translated to its start position (toolStartOrigin) and moved by
 //   `move/mesh ... linear/variable` with the equal-style variables `tool<i>_vx/_vy/_vz` (m/s).
 // - Deposition: each layer is inserted once by insert/pack into its own slab of a stretched stack
-//   (bottom layer lowest), so that after settling under gravity the layers lie in study order. The
+//   (bottom layer lowest), so that after settling under gravity the layers lie in study order;
+//   particles whose centre ends above soil.fill_height_m are then removed (as the built-in backend
+//   does; the stack is sized to overfill slightly). The
 //   tools come after it: particles closer than r_max to a tool's start position are deleted, then the
 //   tool meshes are created (a tool present during deposition keeps particles from settling).
 // - Errors: translateStudy() throws adapter::CouplingError(Unsupported) naming the study field when
@@ -37,6 +39,7 @@ namespace demfem::liggghts {
 struct InputDeck {
   std::vector<std::string> setup;           // box, materials, contact model, bin walls, gravity, output
   std::vector<std::string> deposition;      // particle templates and insertion (run before settling)
+  std::vector<std::string> trim;            // after settling: remove particles centred above the fill
   std::vector<std::string> tool_clearance;  // after settling: remove particles in the tools' way
   std::vector<std::string> tools;           // tool meshes, their wall and movers
   int atom_type_count = 0;
