@@ -128,14 +128,18 @@ std::string pairTable(const study::Study& study, const std::vector<std::string>&
   for (const auto& a : materials)
     for (const auto& b : materials) {
       const auto interaction = interactionOf(study, a, b);
-      line += " " + num(interaction ? value(*interaction) : never_touching);
+      line += ' ';  // (" " + num(...) trips GCC 12's false -Wrestrict positive)
+      line += num(interaction ? value(*interaction) : never_touching);
     }
   return line;
 }
 
 std::string uniformPairTable(std::size_t n, const std::string& fix_id, const std::string& property, double value) {
   std::string line = "fix " + fix_id + " all property/global " + property + " peratomtypepair " + std::to_string(n);
-  for (std::size_t k = 0; k < n * n; ++k) line += " " + num(value);
+  for (std::size_t k = 0; k < n * n; ++k) {
+    line += ' ';
+    line += num(value);
+  }
   return line;
 }
 
