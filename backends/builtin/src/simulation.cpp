@@ -85,6 +85,7 @@ DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int 
     thread_f_.resize(threads_);
     thread_t_.resize(threads_);
   }
+  thread_wall_.resize(threads_);
 }
 
 void DemSimulation::useMaterial(int material, bool particle) {
@@ -315,17 +316,9 @@ struct DemSimulation::CellGrid {
   std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; }
 };
 
-bool DemSimulation::listsStale() const {
-  if (!lists_valid_) return true;
+// Particles are checked in the drift loop of step(); this covers the mesh nodes.
+bool DemSimulation::meshesMovedBeyondSkin() const {
   const double lim2 = 0.25 * skin_ * skin_;
-  const std::size_t n = particleCount();
-  int stale = 0;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : stale)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double d[3] = {x_[3 * i] - x_build_[3 * i], x_[3 * i + 1] - x_build_[3 * i + 1], x_[3 * i + 2] - x_build_[3 * i + 2]};
-    if (norm2(d) > lim2) stale |= 1;
-  }
-  if (stale) return true;
   for (std::size_t m = 0; m < meshes_.size(); ++m)
     for (std::size_t k = 0; k < mesh_bin_nodes_[m].size(); ++k) {
       const double d[3] = {mesh_bin_nodes_[m][k][0] - mesh_build_nodes_[m][k][0],
@@ -496,6 +489,14 @@ void DemSimulation::buildWallCandidates(const CellGrid& g) {
     wc_tri_[c] = cands[c].tri;
   }
   for (std::size_t i = 0; i < n; ++i) wc_start_[i + 1] += wc_start_[i];
+  // Plane walls: only particles within radius + skin of one can touch it before the next build.
+  near_plane_.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (const auto& pl : planes_) {
+      const double dist = (x_[3 * i] - pl.point[0]) * pl.normal[0] + (x_[3 * i + 1] - pl.point[1]) * pl.normal[1] +
+                          (x_[3 * i + 2] - pl.point[2]) * pl.normal[2];
+      if (dist < radius_[i] + skin_) near_plane_[i] = 1;
+    }
 }
 
 // ---------------------------------------------------------------- forces
@@ -525,7 +526,7 @@ void DemSimulation::pairForces() {
     for (std::size_t i = 0; i < n; ++i) {
       const double xi = x_[3 * i], yi = x_[3 * i + 1], zi = x_[3 * i + 2];
       const double ri = radius_[i];
-      const int mi = material_[i];
+      const PairLaw* laws_i = &table_.law(material_[i], 0);  // row of i's material
       for (std::int32_t s = nb_start_[i]; s < nb_start_[i + 1]; ++s) {
         const std::size_t j = static_cast<std::size_t>(nb_j_[s]);
         const double d[3] = {xi - x_[3 * j], yi - x_[3 * j + 1], zi - x_[3 * j + 2]};
@@ -540,7 +541,7 @@ void DemSimulation::pairForces() {
           }
           continue;
         }
-        nb_touch_[s] = 1;
+        if (!nb_touch_[s]) nb_touch_[s] = 1;
         ContactKinematics k;
         const double r = std::sqrt(r2);
         const double rinv = 1.0 / r;
@@ -567,7 +568,7 @@ void DemSimulation::pairForces() {
         detail::cross3(wr, k.n, wxn);
         for (int c = 0; c < 3; ++c) k.vt[c] = vr[c] - k.vn * k.n[c] - wxn[c];
         const ContactResult res =
-            contactForce<N, R>(model_, layout_, table_.law(mi, material_[j]), nb_stiff_[s], k, dt, hist, false);
+            contactForce<N, R>(model_, layout_, laws_i[material_[j]], nb_stiff_[s], k, dt, hist, false);
         for (int c = 0; c < 3; ++c) {
           F[3 * i + c] += res.force[c];
           F[3 * j + c] -= res.force[c];
@@ -578,17 +579,17 @@ void DemSimulation::pairForces() {
     }
     thread_max[tid] = local_max;
     thread_bad[tid] = bad;
-  }
-  if (T > 1) {
-#pragma omp parallel for num_threads(T) schedule(static)
-    for (std::size_t q = 0; q < 3 * n; ++q) {
-      double fs = f_[q], ts = t_[q];
-      for (int t = 0; t < T; ++t) {
-        fs += thread_f_[t][q];
-        ts += thread_t_[t][q];
+    if (T > 1) {  // every thread takes this branch; the loop above ended with a barrier
+#pragma omp for schedule(static)
+      for (std::size_t q = 0; q < 3 * n; ++q) {
+        double fs = f_[q], ts = t_[q];
+        for (int t = 0; t < T; ++t) {
+          fs += thread_f_[t][q];
+          ts += thread_t_[t][q];
+        }
+        f_[q] = fs;
+        t_[q] = ts;
       }
-      f_[q] = fs;
-      t_[q] = ts;
     }
   }
   max_overlap_ = *std::max_element(thread_max.begin(), thread_max.end());
@@ -609,7 +610,6 @@ void DemSimulation::wallForces() {
   const int P = static_cast<int>(planes_.size());
   const double dt = dt_;
   const int H = layout_.size;
-  std::vector<std::vector<WallContact>> produced(T);
   std::vector<double> thread_max(T, 0.0);
   std::vector<std::int64_t> thread_bad(T, -1);
   const bool have_old = wall_start_.size() == n + 1;
@@ -627,7 +627,8 @@ void DemSimulation::wallForces() {
 #pragma omp parallel num_threads(T)
   {
     const int tid = omp_get_thread_num();
-    auto& out = produced[tid];
+    auto& out = thread_wall_[tid];
+    out.clear();
     double local_max = 0;
     std::int64_t bad = -1;
     Touch touch[kMaxWallCandidates];
@@ -638,7 +639,7 @@ void DemSimulation::wallForces() {
       const Vec3 xi{x_[3 * i], x_[3 * i + 1], x_[3 * i + 2]};
       const double ri = radius_[i];
       int nt = 0;
-      for (int p = 0; p < P; ++p) {
+      for (int p = 0; p < (near_plane_[i] ? P : 0); ++p) {
         const auto& pl = planes_[p];
         const double dist = (xi[0] - pl.point[0]) * pl.normal[0] + (xi[1] - pl.point[1]) * pl.normal[1] +
                             (xi[2] - pl.point[2]) * pl.normal[2];
@@ -732,13 +733,19 @@ void DemSimulation::wallForces() {
         wc.particle = static_cast<std::int32_t>(i);
         wc.wall = t.wall;
         wc.key = t.key;
-        if (matched_old[a] >= 0) std::memcpy(wc.hist, wall_contacts_[matched_old[a]].hist, sizeof(wc.hist));
+        const bool is_mesh = t.wall >= P;
+        const int wall_material = is_mesh ? meshes_[t.wall - P].material : planes_[t.wall].material;
+        if (matched_old[a] >= 0) {
+          const WallContact& old = wall_contacts_[matched_old[a]];
+          std::memcpy(wc.hist, old.hist, sizeof(wc.hist));
+          wc.stiffness = old.stiffness;
+        } else {
+          wc.stiffness = wallStiffness(static_cast<int>(i), wall_material);
+        }
         for (int q = 0; q < 3; ++q) {
           wc.nodes[q] = t.nodes[q];
           wc.weights[q] = t.weights[q];
         }
-        const bool is_mesh = t.wall >= P;
-        const int wall_material = is_mesh ? meshes_[t.wall - P].material : planes_[t.wall].material;
         ContactKinematics k;
         for (int c = 0; c < 3; ++c) k.n[c] = t.normal[c];
         k.delta = ri - t.dist;
@@ -771,7 +778,7 @@ void DemSimulation::wallForces() {
         detail::cross3(wr, k.n, wxn);
         for (int c = 0; c < 3; ++c) k.vt[c] = vr[c] - k.vn * k.n[c] - wxn[c];
         const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wall_material),
-                                                     wallStiffness(static_cast<int>(i), wall_material), k, dt,
+                                                     wc.stiffness, k, dt,
                                                      H ? wc.hist : nullptr, true);
         for (int c = 0; c < 3; ++c) {
           f_[3 * i + c] += res.force[c];
@@ -785,8 +792,12 @@ void DemSimulation::wallForces() {
     thread_bad[tid] = bad;
   }
   // Gather in particle order (static schedule: thread blocks are ascending).
-  wall_contacts_.clear();
-  for (auto& v : produced) wall_contacts_.insert(wall_contacts_.end(), v.begin(), v.end());
+  if (T == 1) {
+    wall_contacts_.swap(thread_wall_[0]);  // the old contacts' memory is reused next step
+  } else {
+    wall_contacts_.clear();
+    for (auto& v : thread_wall_) wall_contacts_.insert(wall_contacts_.end(), v.begin(), v.end());
+  }
   wall_start_.assign(n + 1, 0);
   for (const auto& wc : wall_contacts_) ++wall_start_[wc.particle + 1];
   for (std::size_t i = 0; i < n; ++i) wall_start_[i + 1] += wall_start_[i];
@@ -815,14 +826,7 @@ void DemSimulation::wallForces() {
            "overlap with a wall exceeds " + std::to_string(overlapLimitFraction()) + " of its radius");
 }
 
-void DemSimulation::computeForces() {
-  const std::size_t n = particleCount();
-#pragma omp parallel for num_threads(threads_) schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) {
-      f_[3 * i + c] = mass_[i] * gravity_[c];
-      t_[3 * i + c] = 0;
-    }
+void DemSimulation::contactForces() {
   using NM = study::NormalModel;
   using RM = study::RollingModel;
   const auto dispatch = [&]<NM N>() {
@@ -854,47 +858,51 @@ void DemSimulation::step() {
   if (step_ == 0 || !lists_valid_) {  // forces of the initial state for the first half kick
     updateMeshBinNodes();
     rebuildLists();
-    computeForces();
-  }
-  // Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick, drift, forces, half kick.
 #pragma omp parallel for num_threads(threads_) schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < n; ++i) resetForce(i);
+    contactForces();
+  }
+  // Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick. Each
+  // pass over the particles does all it can (the skin check and the force reset ride on the drift,
+  // the health check on the second kick): one sweep of the arrays and one thread fork per pass.
+  const double lim2 = 0.25 * skin_ * skin_;
+  int moved = 0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : moved)
+  for (std::size_t i = 0; i < n; ++i) {
+    double d2 = 0;
     for (int c = 0; c < 3; ++c) {
       v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
       w_[3 * i + c] += half * t_[3 * i + c] * inv_inertia_[i];
       x_[3 * i + c] += dt_ * v_[3 * i + c];
+      const double d = x_[3 * i + c] - x_build_[3 * i + c];
+      d2 += d * d;
     }
+    if (d2 > lim2) moved = 1;
+    resetForce(i);
+  }
   time_ += dt_;
   ++step_;
   updateMeshBinNodes();
-  if (listsStale()) rebuildLists();
-  computeForces();
-#pragma omp parallel for num_threads(threads_) schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) {
-      v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
-      w_[3 * i + c] += half * t_[3 * i + c] * inv_inertia_[i];
-    }
-  checkHealth();
-}
-
-void DemSimulation::checkHealth() {
-  const std::size_t n = particleCount();
+  if (moved || meshesMovedBeyondSkin()) rebuildLists();
+  contactForces();
   std::int64_t bad = std::numeric_limits<std::int64_t>::max();
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(min : bad)
   for (std::size_t i = 0; i < n; ++i) {
     bool ok = true;
     for (int c = 0; c < 3; ++c) {
+      v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
+      w_[3 * i + c] += half * t_[3 * i + c] * inv_inertia_[i];
       ok = ok && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]) && std::isfinite(w_[3 * i + c]);
       ok = ok && x_[3 * i + c] >= domain_.lo[c] && x_[3 * i + c] <= domain_.hi[c];
     }
     if (!ok) bad = std::min<std::int64_t>(bad, static_cast<std::int64_t>(i));
   }
-  if (bad == std::numeric_limits<std::int64_t>::max()) return;
-  const std::size_t i = static_cast<std::size_t>(bad);
-  bool finite = true;
-  for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]);
-  fail(i, finite ? "centre left the domain" : "position or velocity is not a number");
+  if (bad != std::numeric_limits<std::int64_t>::max()) {
+    const std::size_t i = static_cast<std::size_t>(bad);
+    bool finite = true;
+    for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]);
+    fail(i, finite ? "centre left the domain" : "position or velocity is not a number");
+  }
 }
 
 void DemSimulation::fail(std::size_t i, const std::string& what) const {
@@ -968,7 +976,7 @@ std::size_t DemSimulation::bytesPerParticle() const {
 // ---------------------------------------------------------------- checkpoint
 
 namespace {
-constexpr char kMagic[8] = {'D', 'F', 'D', 'E', 'M', 'S', 'T', '1'};
+constexpr char kMagic[8] = {'D', 'F', 'D', 'E', 'M', 'S', 'T', '2'};
 
 template <class T>
 void put(std::ostream& out, const T& v) {
@@ -1036,6 +1044,7 @@ void DemSimulation::saveState(std::ostream& out) const {
   putVec(out, wc_start_);
   putVec(out, wc_mesh_);
   putVec(out, wc_tri_);
+  putVec(out, near_plane_);
   putVec(out, wall_contacts_);
   putVec(out, wall_start_);
   putVec(out, plane_force_);
@@ -1105,6 +1114,7 @@ void DemSimulation::loadState(std::istream& in) {
   getVec(in, wc_start_);
   getVec(in, wc_mesh_);
   getVec(in, wc_tri_);
+  getVec(in, near_plane_);
   getVec(in, wall_contacts_);
   getVec(in, wall_start_);
   getVec(in, plane_force_);

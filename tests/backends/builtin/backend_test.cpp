@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <numbers>
+#include <vector>
 
 using namespace demfem;
 
@@ -146,4 +148,71 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     api->shutdown();
     CHECK_THROWS_AS(api->simulate(0.001), adapter::CouplingError);
   }
+}
+
+namespace {
+
+// Mean z force of the particles on the tool (sum over its nodes, N) over the second half of a
+// `drag_m` drag, and its standard error from 10 ms block means.
+struct Draught {
+  double mean_N = 0, standard_error_N = 0;
+};
+
+Draught dragTool(const study::Study& st, double drag_m) {
+  auto api = builtin::makeBackend(st);
+  const double interval = 0.01;
+  const int intervals = static_cast<int>(std::lround(drag_m / st.tools[0].motion.velocity_m_s / interval));
+  std::vector<double> fz;
+  for (int k = 0; k < intervals; ++k) {
+    api->simulate(interval);
+    if (k < intervals / 2) continue;
+    const auto f = api->nodeForces("tool");
+    double sum = 0;
+    for (std::size_t q = 2; q < f.size(); q += 3) sum += f[q];
+    fz.push_back(sum);
+  }
+  Draught d;
+  for (double v : fz) d.mean_N += v / static_cast<double>(fz.size());
+  double var = 0;
+  for (double v : fz) var += (v - d.mean_N) * (v - d.mean_N) / static_cast<double>(fz.size() - 1);
+  d.standard_error_N = std::sqrt(var / static_cast<double>(fz.size()));
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("dragging the tool through the soil loads it against the travel, more the deeper it cuts", "[builtin]") {
+  const SoilDirectory soil_dir;
+  study::Study shallow = smallStudy();  // 10 mm deep, front face at z = 30 mm, dragged along +z
+  study::Study deep = shallow;
+  deep.tools[0].motion.depth_m = 0.02;  // 20 mm above the floor: two grains, no jamming under the tip
+  // 40 mm of travel (the bin is 120 mm long); the mean is taken over the last 20 mm.
+  const Draught d10 = dragTool(shallow, 0.04);
+  const Draught d20 = dragTool(deep, 0.04);
+  INFO("draught at 10 mm: " << d10.mean_N << " +- " << d10.standard_error_N << " N; at 20 mm: " << d20.mean_N << " +- "
+                            << d20.standard_error_N << " N");
+  // The soil pushes the tool back (-z), well beyond the scatter of the mean.
+  CHECK(d10.mean_N < -3 * d10.standard_error_N);
+  CHECK(d20.mean_N < -3 * d20.standard_error_N);
+  // Passive earth pressure grows with the square of the depth (Rankine: F = gamma d^2 Kp w / 2, a
+  // factor (20/10)^2 = 4 here); with particles as large as the shallow depth and friction on the
+  // plate's faces adding a part linear in depth, at least a factor 2 must remain.
+  CHECK(d20.mean_N < 2 * d10.mean_N);
+
+  // Magnitude at 20 mm against Rankine's passive pressure on the 40 mm wide plate, with the unit
+  // weight of the settled soil and the assembly's friction angle bracketed by 20-45 degrees
+  // (Kp = (1 + sin phi) / (1 - sin phi)); the upper end allows 50 % more for the side wedges of a
+  // 3D cut and the friction on the plate's faces.
+  const auto settled = builtin::readSettledSoil(builtin::soilFile(deep, soil_dir.dir));
+  double solid_volume = 0;
+  for (const auto& p : settled.particles) solid_volume += 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius, 3);
+  const auto& soil = deep.soil;
+  const double gamma = 2600 * 9.81 * solid_volume / (soil.bin_length_m * soil.bin_width_m * soil.fill_height_m);
+  const auto kp = [](double phi_deg) {
+    const double s = std::sin(phi_deg * std::numbers::pi / 180);
+    return (1 + s) / (1 - s);
+  };
+  const double rankine = 0.5 * gamma * 0.02 * 0.02 * deep.tools[0].geometry.width_m;
+  CHECK(-d20.mean_N > rankine * kp(20));
+  CHECK(-d20.mean_N < 1.5 * rankine * kp(45));
 }

@@ -154,7 +154,7 @@ inline void cross3(const double* a, const double* b, double* c) {
 
 // Normal force (elastic/plastic + viscous, no cohesion) of normal model N; updates delta_max.
 template <study::NormalModel N>
-inline double normalForce(const study::ContactModel& model, const PairLaw& law, const ContactStiffness& s,
+[[gnu::always_inline]] inline double normalForce(const study::ContactModel& model, const PairLaw& law, const ContactStiffness& s,
                           const ContactKinematics& k, double* delta_max) {
   const double delta = k.delta;
   if constexpr (N == study::NormalModel::Hooke) {
@@ -194,7 +194,7 @@ inline double normalForce(const study::ContactModel& model, const PairLaw& law, 
 }
 
 // Cohesive normal force (<= 0) of the selected cohesion model.
-inline double cohesionForce(study::CohesionModel model, const PairLaw& law, const ContactKinematics& k, bool wall) {
+[[gnu::always_inline]] inline double cohesionForce(study::CohesionModel model, const PairLaw& law, const ContactKinematics& k, bool wall) {
   constexpr double pi = std::numbers::pi;
   double area = 0;
   switch (model) {
@@ -216,7 +216,7 @@ inline double cohesionForce(study::CohesionModel model, const PairLaw& law, cons
 // The complete contact: normal, cohesion, tangential (with or without history), rolling.
 // `hist` points to HistoryLayout::size doubles of this contact (may be null if size is 0).
 template <study::NormalModel N, study::RollingModel R>
-inline ContactResult contactForce(const study::ContactModel& model, const HistoryLayout& layout, const PairLaw& law,
+[[gnu::always_inline]] inline ContactResult contactForce(const study::ContactModel& model, const HistoryLayout& layout, const PairLaw& law,
                                   const ContactStiffness& s, const ContactKinematics& k, double dt, double* hist,
                                   bool wall) {
   using detail::cross3;

@@ -142,6 +142,7 @@ class DemSimulation {
     std::int32_t particle, wall;    // wall: plane index, or planes.size() + mesh index
     std::int64_t key;               // feature key (0 for a plane)
     double hist[7];
+    ContactStiffness stiffness;     // fixed for the particle-wall pair: computed when the contact opens
     std::int32_t nodes[3];
     double weights[3];
     double force[3];                // on the particle
@@ -152,12 +153,17 @@ class DemSimulation {
   void rebuildLists();
   void buildNeighbourList(const CellGrid& grid);
   void buildWallCandidates(const CellGrid& grid);
-  bool listsStale() const;
+  bool meshesMovedBeyondSkin() const;
   void updateMeshBinNodes();
   template <study::NormalModel N, study::RollingModel R> void pairForces();
   template <study::NormalModel N, study::RollingModel R> void wallForces();
-  void computeForces();
-  void checkHealth();
+  void resetForce(std::size_t i) {  // gravity only, no torque: the start of every force evaluation
+    for (int c = 0; c < 3; ++c) {
+      f_[3 * i + c] = mass_[i] * gravity_[c];
+      t_[3 * i + c] = 0;
+    }
+  }
+  void contactForces();  // adds pair and wall contact forces to f_, t_
   ContactStiffness wallStiffness(int i, int wall_material) const;
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
   void useMaterial(int material, bool particle);
@@ -193,13 +199,16 @@ class DemSimulation {
   std::vector<std::vector<Vec3>> mesh_build_nodes_;  // bin positions at the last list build
   std::vector<std::int32_t> wc_start_;               // candidate (mesh, triangle) per particle (CSR)
   std::vector<std::int32_t> wc_mesh_, wc_tri_;
+  std::vector<std::uint8_t> near_plane_;             // per particle: within reach of a plane wall
   std::vector<WallContact> wall_contacts_;           // touching, sorted by particle
   std::vector<std::int32_t> wall_start_;             // CSR offsets into wall_contacts_
   std::vector<std::vector<double>> mesh_force_, mesh_impulse_;
   std::vector<Vec3> plane_force_;
 
-  // per-thread force buffers (threads_ > 1)
+  // per-thread force buffers (threads_ > 1) and wall contacts found by each thread (kept to reuse
+  // their memory from step to step)
   std::vector<std::vector<double>> thread_f_, thread_t_;
+  std::vector<std::vector<WallContact>> thread_wall_;
   // blow-up detection filled by the force loops
   double max_overlap_ = 0;
 };
