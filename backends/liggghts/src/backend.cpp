@@ -285,6 +285,10 @@ SettledParticles gatherParticles(LAMMPS_NS::LAMMPS* lmp) {
   return particles;
 }
 
+// Part of the settled-soil file name: raise it whenever the deposition (input_deck.cpp) changes what
+// it produces, so that soils of an earlier deposition are no longer found (they stay on disk).
+constexpr int kDepositionVersion = 2;
+
 // Rank 0's status of reading the soil file, broadcast so that every rank takes the same branch.
 enum class SoilFileStatus : int { Missing = 0, Loaded = 1, Damaged = 2 };
 
@@ -514,11 +518,12 @@ class Engine {
             exact(density));
   }
 
-  // The settled soil of the study: read from soilDirectory()/liggghts-soil-<soilHash>.bin if there,
+  // The settled soil of the study: read from soilDirectory()/liggghts-soil-<soilHash>-v<version>.bin if there,
   // else deposited in a LIGGGHTS instance of its own and saved there (rank 0 reads and writes).
   SettledParticles settledSoil(const study::Study& study, const InputDeck& deck, const BackendOptions& options) {
     const std::string hash = study::soilHash(study);
-    soil_file_ = soilDirectory(options) / ("liggghts-soil-" + hash + ".bin");
+    soil_file_ = soilDirectory(options) /
+                 ("liggghts-soil-" + hash + "-v" + std::to_string(kDepositionVersion) + ".bin");
     SettledParticles particles;
     int status = static_cast<int>(SoilFileStatus::Missing);
     std::string problem;
@@ -542,7 +547,16 @@ class Engine {
       deposit(deposition, study, deck);
       for (const auto& line : deck.trim) deposition.command(line);
       particles = gatherParticles(deposition.get());
-      if (worldRank() == 0) writeSoilFile(soil_file_, hash, particles);
+      int written = 1;
+      if (worldRank() == 0) try {
+          writeSoilFile(soil_file_, hash, particles);
+        } catch (const std::exception& e) {
+          written = 0;
+          problem = e.what();
+        }
+      MPI_Bcast(&written, 1, MPI_INT, 0, MPI_COMM_WORLD);  // every rank fails alike, none waits forever
+      if (!written)
+        throw CouplingError(ErrorCode::Internal, worldRank() == 0 ? problem : "rank 0 cannot write " + soil_file_.string());
       return particles;
     }
     auto count = static_cast<std::uint64_t>(particles.size());

@@ -6,14 +6,15 @@
 //   reaches LIGGGHTS: LIGGGHTS stops the process on an input error, so what it would reject is
 //   reported here as adapter::CouplingError instead.
 // - Construction takes the settled soil from BackendOptions::soil_directory (default: $DEMFEM_SOIL_DIR,
-//   else ./soil) / liggghts-soil-<study::soilHash>.bin, or, without that file, deposits it (insert,
-//   settle under gravity until the translational kinetic energy falls below
-//   soil.settle_kinetic_energy_J) in a LIGGGHTS instance of its own and writes the file. Either way
-//   the simulation starts from the file's particles at rest (positions, radii, types; no contact
-//   history), so a run gives the same numbers whether its soil was cached or not. A damaged file or
-//   one of another soil is an error (BadRequest naming it), never silently replaced. Then the
-//   particles in the tools' way are removed and the tools put at
-//   their start positions (toolStartOrigin(), velocity zero); time() is 0 after it. With
+//   else ./soil) / liggghts-soil-<study::soilHash>-v<deposition version>.bin, or, without that file,
+//   deposits it (insert, settle under gravity until the translational kinetic energy falls below
+//   soil.settle_kinetic_energy_J, remove particles centred above the fill height) in a LIGGGHTS
+//   instance of its own and writes the file. Either way the simulation starts from the file's
+//   particles at rest (positions, radii, types; no contact history), so a run gives the same numbers
+//   whether its soil was cached or not. A damaged file or one of another soil is an error
+//   (BadRequest naming it), never silently replaced. Then the particles in the tools' way are
+//   removed and the tools put at their start positions (toolStartOrigin(), velocity zero); time()
+//   is 0 after it. With
 //   BackendOptions::probes set, the soil is replaced by fixed probe spheres (no deposition, no time
 //   integration of particles).
 // - Node forces: accumulated at every DEM step from the per-contact forces LIGGGHTS stores for the
