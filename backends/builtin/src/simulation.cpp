@@ -428,6 +428,13 @@ void DemSimulation::buildNeighbourList(const CellGrid& g) {
       }
     }
   }
+  thread_window_end_.assign(T, 0);
+  for (int t = 0; t < T; ++t) {
+    const std::size_t lo = n * t / T, hi = n * (t + 1) / T;
+    std::size_t end = hi;
+    for (std::int32_t s = start[lo]; s < start[hi]; ++s) end = std::max(end, static_cast<std::size_t>(nbj[s]) + 1);
+    thread_window_end_[t] = end;
+  }
   nb_start_ = std::move(start);
   nb_j_ = std::move(nbj);
   nb_stiff_ = std::move(stiff);
@@ -512,18 +519,22 @@ void DemSimulation::pairForces() {
 #pragma omp parallel num_threads(T)
   {
     const int tid = omp_get_thread_num();
+    // Thread tid owns rows [lo, hi); it writes particles [lo, window_end) only (half list: j > i),
+    // so its buffer is cleared and summed over that window alone.
+    const std::size_t lo = n * tid / T, hi = n * (tid + 1) / T, window_end = thread_window_end_[tid];
     double* F = f_.data();
     double* Tq = t_.data();
     if (T > 1) {
-      thread_f_[tid].assign(3 * n, 0.0);
-      thread_t_[tid].assign(3 * n, 0.0);
+      thread_f_[tid].resize(3 * n);
+      thread_t_[tid].resize(3 * n);
+      std::fill(thread_f_[tid].begin() + 3 * lo, thread_f_[tid].begin() + 3 * window_end, 0.0);
+      std::fill(thread_t_[tid].begin() + 3 * lo, thread_t_[tid].begin() + 3 * window_end, 0.0);
       F = thread_f_[tid].data();
       Tq = thread_t_[tid].data();
     }
     double local_max = 0;
     std::int64_t bad = -1;
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = lo; i < hi; ++i) {
       const double xi = x_[3 * i], yi = x_[3 * i + 1], zi = x_[3 * i + 2];
       const double ri = radius_[i];
       const PairLaw* laws_i = &table_.law(material_[i], 0);  // row of i's material
@@ -579,16 +590,23 @@ void DemSimulation::pairForces() {
     }
     thread_max[tid] = local_max;
     thread_bad[tid] = bad;
-    if (T > 1) {  // every thread takes this branch; the loop above ended with a barrier
+    if (T > 1) {  // every thread takes this branch
+#pragma omp barrier
 #pragma omp for schedule(static)
-      for (std::size_t q = 0; q < 3 * n; ++q) {
-        double fs = f_[q], ts = t_[q];
+      for (std::size_t i = 0; i < n; ++i) {
+        double fs[3] = {f_[3 * i], f_[3 * i + 1], f_[3 * i + 2]};
+        double ts[3] = {t_[3 * i], t_[3 * i + 1], t_[3 * i + 2]};
         for (int t = 0; t < T; ++t) {
-          fs += thread_f_[t][q];
-          ts += thread_t_[t][q];
+          if (i < n * t / T || i >= thread_window_end_[t]) continue;
+          for (int c = 0; c < 3; ++c) {
+            fs[c] += thread_f_[t][3 * i + c];
+            ts[c] += thread_t_[t][3 * i + c];
+          }
         }
-        f_[q] = fs;
-        t_[q] = ts;
+        for (int c = 0; c < 3; ++c) {
+          f_[3 * i + c] = fs[c];
+          t_[3 * i + c] = ts[c];
+        }
       }
     }
   }
@@ -1024,6 +1042,7 @@ void DemSimulation::saveState(std::ostream& out) const {
   putVec(out, nb_stiff_);
   putVec(out, nb_hist_);
   putVec(out, nb_touch_);
+  putVec(out, thread_window_end_);
   putVec(out, planes_);
   put(out, static_cast<std::uint64_t>(meshes_.size()));
   for (std::size_t m = 0; m < meshes_.size(); ++m) {
@@ -1084,6 +1103,7 @@ void DemSimulation::loadState(std::istream& in) {
   getVec(in, nb_stiff_);
   getVec(in, nb_hist_);
   getVec(in, nb_touch_);
+  getVec(in, thread_window_end_);
   getVec(in, planes_);
   std::uint64_t nmesh = 0;
   get(in, nmesh);

@@ -208,6 +208,7 @@ class DemSimulation {
   // per-thread force buffers (threads_ > 1) and wall contacts found by each thread (kept to reuse
   // their memory from step to step)
   std::vector<std::vector<double>> thread_f_, thread_t_;
+  std::vector<std::size_t> thread_window_end_;  // one past the highest particle a thread's rows reach
   std::vector<std::vector<WallContact>> thread_wall_;
   // blow-up detection filled by the force loops
   double max_overlap_ = 0;

@@ -1,0 +1,161 @@
+// STL import and VTK output of the builtin DEM.
+#include "demfem/backends/builtin/simulation.hpp"
+#include "demfem/backends/builtin/triangle_mesh.hpp"
+#include "test_soil.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+using namespace demfem::builtin;
+
+namespace {
+
+// A tetrahedron with corners (0,0,0), (1,0,0), (0,1,0), (0,0,1) (file units): 4 faces, 4 nodes.
+const Vec3 kCorners[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+const int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+
+std::filesystem::path tempFile(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "demfem-builtin-mesh-io-test";
+  std::filesystem::create_directories(dir);
+  return dir / name;
+}
+
+void writeAsciiStl(const std::filesystem::path& file) {
+  std::ofstream out(file);
+  out << "solid tetra\n";
+  for (const auto& f : kFaces) {
+    out << "  facet normal 0 0 0\n    outer loop\n";
+    for (int v : f) out << "      vertex " << kCorners[v][0] << ' ' << kCorners[v][1] << ' ' << kCorners[v][2] << '\n';
+    out << "    endloop\n  endfacet\n";
+  }
+  out << "endsolid tetra\n";
+}
+
+void writeBinaryStl(const std::filesystem::path& file, std::uint32_t claimed_triangles) {
+  std::ofstream out(file, std::ios::binary);
+  const std::string header(80, ' ');
+  out.write(header.data(), 80);
+  out.write(reinterpret_cast<const char*>(&claimed_triangles), 4);
+  for (const auto& f : kFaces) {
+    const float normal[3] = {0, 0, 0};
+    out.write(reinterpret_cast<const char*>(normal), 12);
+    for (int v : f) {
+      const float xyz[3] = {static_cast<float>(kCorners[v][0]), static_cast<float>(kCorners[v][1]),
+                            static_cast<float>(kCorners[v][2])};
+      out.write(reinterpret_cast<const char*>(xyz), 12);
+    }
+    const std::uint16_t attribute = 0;
+    out.write(reinterpret_cast<const char*>(&attribute), 2);
+  }
+}
+
+void checkTetrahedron(const TriangleMesh& mesh, double scale) {
+  REQUIRE(mesh.nodes.size() == 4);  // 12 corners merged into 4 shared nodes
+  REQUIRE(mesh.triangles.size() == 4);
+  for (const auto& corner : kCorners) {
+    bool found = false;
+    for (const auto& n : mesh.nodes)
+      found = found || (n[0] == corner[0] * scale && n[1] == corner[1] * scale && n[2] == corner[2] * scale);
+    CHECK(found);
+  }
+  // Every node is used by exactly three faces (closed tetrahedron).
+  int uses[4] = {0, 0, 0, 0};
+  for (const auto& t : mesh.triangles)
+    for (int v : t) ++uses[v];
+  for (int u : uses) CHECK(u == 3);
+}
+
+// The count after `keyword` ("POINTS 3 double") in a legacy VTK file.
+std::size_t vtkCount(const std::string& text, const std::string& keyword) {
+  std::istringstream in(text.substr(text.find(keyword) + keyword.size()));
+  std::size_t count = 0;
+  in >> count;
+  return count;
+}
+
+// The `rows` lines of numbers after the line that starts with `header`.
+std::vector<std::vector<double>> vtkRows(const std::string& text, const std::string& header, std::size_t rows) {
+  const auto at = text.find(header);
+  if (at == std::string::npos) return {};
+  std::istringstream in(text.substr(at));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::vector<double>> out;
+  for (std::size_t i = 0; i < rows && std::getline(in, line); ++i) {
+    std::istringstream fields(line);
+    std::vector<double> row;
+    for (double v; fields >> v;) row.push_back(v);
+    out.push_back(row);
+  }
+  return out;
+}
+
+std::string slurp(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("ASCII and binary STL files give the same merged mesh in metres", "[builtin]") {
+  const auto ascii = tempFile("tetra_ascii.stl");
+  const auto binary = tempFile("tetra_binary.stl");
+  writeAsciiStl(ascii);
+  writeBinaryStl(binary, 4);
+  checkTetrahedron(readStl(ascii, 0.001), 0.001);  // file in mm
+  checkTetrahedron(readStl(binary, 0.001), 0.001);
+  CHECK(readStl(ascii).name == "tetra_ascii");
+}
+
+TEST_CASE("a truncated or missing STL file is refused with its name and the problem", "[builtin]") {
+  const auto truncated = tempFile("tetra_truncated.stl");
+  writeBinaryStl(truncated, 5);  // header claims one triangle more than the file holds
+  CHECK_THROWS_WITH(readStl(truncated), Catch::Contains("tetra_truncated.stl") && Catch::Contains("truncated"));
+  CHECK_THROWS_WITH(readStl(tempFile("absent.stl")), Catch::Contains("absent.stl") && Catch::Contains("cannot open"));
+}
+
+TEST_CASE("VTK files of particles and meshes hold the positions, connectivity and node forces", "[builtin]") {
+  using namespace demfem::builtin::testing;
+  DemSimulation sim(makeSoil({}), box(1.0), 1);
+  const ParticleState particles[3] = {{{0.1, 0.2, 0.3}, {1, 0, 0}, {0, 0, 0}, 0.005, 0, 0},
+                                      {{-0.1, 0.0, 0.2}, {0, 2, 0}, {0, 0, 0}, 0.006, 0, 0},
+                                      {{0.0, -0.3, 0.0}, {0, 0, 3}, {0, 0, 0}, 0.007, 0, 0}};
+  for (const auto& p : particles) sim.addParticle(p);
+  TriangleMesh tetra = readStl([] {
+    const auto f = tempFile("tetra_for_vtk.stl");
+    writeAsciiStl(f);
+    return f;
+  }(), 0.01);
+  sim.addMesh(tetra);
+
+  const auto pfile = tempFile("particles.vtk");
+  sim.writeParticlesVtk(pfile);
+  const std::string ptext = slurp(pfile);
+  REQUIRE(ptext.rfind("# vtk DataFile Version", 0) == 0);
+  REQUIRE(vtkCount(ptext, "POINTS") == 3);
+  const auto points = vtkRows(ptext, "POINTS", 3);
+  for (int i = 0; i < 3; ++i)
+    for (int c = 0; c < 3; ++c) CHECK(points[i][c] == Approx(particles[i].x[c]).margin(1e-9));
+  const auto velocity = vtkRows(ptext, "VECTORS velocity_m_s", 3);
+  REQUIRE(velocity.size() == 3);
+  CHECK(velocity[2][2] == Approx(3.0));
+
+  const auto mfile = tempFile("mesh.vtk");
+  sim.writeMeshVtk(0, mfile);
+  const std::string mtext = slurp(mfile);
+  CHECK(vtkCount(mtext, "POINTS") == 4);
+  REQUIRE(vtkCount(mtext, "POLYGONS") == 4);
+  for (const auto& row : vtkRows(mtext, "POLYGONS", 4)) {
+    REQUIRE(row.size() == 4);
+    CHECK(row[0] == 3);
+  }
+  CHECK(vtkRows(mtext, "VECTORS force_N", 4).size() == 4);
+}
