@@ -41,6 +41,12 @@ TEST_CASE("a second construction reads the saved soil instead of depositing and 
   const Snapshot deposited = constructAndDrag(study, options, true);
   const Snapshot loaded = constructAndDrag(study, options, false);
   REQUIRE(deposited.particles.size() > 100);
+  // The deposition overfills and trims to the fill height, as the built-in backend does: no centre
+  // above it, and the top particles reach it (within one largest diameter).
+  double highest_centre = 0;
+  for (const auto& p : deposited.particles) highest_centre = std::max(highest_centre, p[1]);
+  CHECK(highest_centre <= study.soil.fill_height_m);
+  CHECK(highest_centre > study.soil.fill_height_m - study.soil.diameter_max_m);
   // Both simulations start from the file's particles at rest: identical to the last bit, and so is
   // the drag that follows (one rank, same commands).
   CHECK(loaded.particles == deposited.particles);
