@@ -14,6 +14,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <future>
 #include <numeric>
@@ -231,5 +232,43 @@ TEST_CASE("a coupled run of demfem-fem against demfem-dem on LIGGGHTS completes 
   // Loaded against travel, the load cell reads positive and the plate bends backwards (sensors.hpp).
   CHECK(mean_load_cell_N > 0);
   CHECK(mean_deformation_mm > 0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("studies/quick_liggghts.json runs through demfem run on both DEM backends", "[apps][liggghts][physics]") {
+  // The study file itself (bin, layers, laws, tool; deposition included), with the insertion sped up
+  // to 300 mm/s and the run cut to its first 200 FEM steps, so both runs fit the test budget.
+  const fs::path dir = freshDir("quick-liggghts-both");
+  nlohmann::json study = nlohmann::json::parse(readText(sourceDir() / "studies" / "quick_liggghts.json"));
+  study["tools"][0]["motion"]["insertion_velocity_mm_s"] = 300;
+  const fs::path study_file = dir / "quick_liggghts.json";
+  std::ofstream(study_file) << study.dump(2);
+  ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);
+  const int steps = 200;
+  // Insertion: tip from one largest diameter above the fill to the depth, in whole FEM steps.
+  const double insertion_mm = study["soil"]["particles"]["diameter_max_mm"].get<double>() +
+                              study["tools"][0]["motion"]["depth_mm"].get<double>();
+  const double insertion_s = insertion_mm / 300.0;
+  const auto insertion_steps =
+      static_cast<std::size_t>(std::ceil(insertion_s / study["fem"]["dt_s"].get<double>() - 1e-9));
+  for (const std::string backend : {"builtin", "liggghts"}) {
+    INFO("backend " << backend);
+    const fs::path out = dir / backend;
+    Process run({app("demfem"), "run", study_file.string(), "--backend", backend, "--steps", std::to_string(steps),
+                 "--output", out.string(), "--quiet"},
+                dir / backend);
+    const int status = run.wait(100s);
+    INFO("demfem run stderr: " << run.err());
+    REQUIRE(exitedOk(status));
+    CHECK(nlohmann::json::parse(readText(out / "sensors.json"))["complete"] == true);
+    const auto rows = csvRows(out / "sensors.csv");
+    CHECK(rows.size() == static_cast<std::size_t>(steps) - insertion_steps);
+    double largest_force = 0;
+    for (const auto& row : rows) {
+      REQUIRE(std::isfinite(row[2]));
+      largest_force = std::max(largest_force, std::abs(row[2]));
+    }
+    CHECK(largest_force > 0.1);  // the tool is in the soil: the load cell reads a force
+  }
   fs::remove_all(dir);
 }
