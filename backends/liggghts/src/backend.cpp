@@ -942,28 +942,29 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, con
   return std::make_unique<LiggghtsBackend>(study, options);
 }
 
-std::array<double, 3> meshTotalForce(adapter::CouplingApi& backend, const std::string& geometry) {
+namespace {
+
+// The backend behind `backend` if this factory made it; `caller` names the function in the error.
+LiggghtsBackend& liggghtsBackend(adapter::CouplingApi& backend, const char* caller) {
   auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
-  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "meshTotalForce: not a liggghts backend");
-  return liggghts->meshTotalForce(geometry);
+  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, std::string(caller) + ": not a liggghts backend");
+  return *liggghts;
+}
+
+}  // namespace
+
+std::array<double, 3> meshTotalForce(adapter::CouplingApi& backend, const std::string& geometry) {
+  return liggghtsBackend(backend, "meshTotalForce").meshTotalForce(geometry);
 }
 
 std::int64_t particleCount(adapter::CouplingApi& backend) {
-  auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
-  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "particleCount: not a liggghts backend");
-  return liggghts->particleCount();
+  return liggghtsBackend(backend, "particleCount").particleCount();
 }
 
-SoilOrigin soilOrigin(adapter::CouplingApi& backend) {
-  auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
-  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "soilOrigin: not a liggghts backend");
-  return liggghts->soilOrigin();
-}
+SoilOrigin soilOrigin(adapter::CouplingApi& backend) { return liggghtsBackend(backend, "soilOrigin").soilOrigin(); }
 
 std::vector<std::array<double, 4>> particles(adapter::CouplingApi& backend) {
-  auto* liggghts = dynamic_cast<LiggghtsBackend*>(&backend);
-  if (!liggghts) throw CouplingError(ErrorCode::BadRequest, "particles: not a liggghts backend");
-  return liggghts->particles();
+  return liggghtsBackend(backend, "particles").particles();
 }
 
 bool isLeaderRank() {
