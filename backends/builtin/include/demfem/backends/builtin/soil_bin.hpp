@@ -8,7 +8,8 @@
 // - Deposition: particles (diameters uniform in [d_min, d_max], seed soil.deposition_seed) are
 //   rained in four stages from the bottom up, one per layer thickness of the study (the paper
 //   deposits the upper 30 mm in 10 mm layers), each stage settling under gravity until the total
-//   kinetic energy is below soil.settle_kinetic_energy_J (or its time cap, reported). Particles whose
+//   kinetic energy is below soil.settle_kinetic_energy_J (or its time cap, reported). The step is
+//   the study's or a tenth of the stiffest spring's critical step, whichever is larger. Particles whose
 //   centre ends above the fill height are removed; the rest are tagged by the depth of their centre
 //   below the fill height with the layer (and that layer's material) covering that depth.
 // - Settled-soil file: binary, little endian, "DFSOIL01", the soil hash (study::soilHash), the
