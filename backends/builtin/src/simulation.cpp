@@ -538,6 +538,8 @@ void DemSimulation::pairForces() {
       const double xi = x_[3 * i], yi = x_[3 * i + 1], zi = x_[3 * i + 2];
       const double ri = radius_[i];
       const PairLaw* laws_i = &table_.law(material_[i], 0);  // row of i's material
+      // i's sums stay in registers over its row (no store-load chain through F[i] per contact).
+      double fi[3] = {0, 0, 0}, ti[3] = {0, 0, 0};
       for (std::int32_t s = nb_start_[i]; s < nb_start_[i + 1]; ++s) {
         const std::size_t j = static_cast<std::size_t>(nb_j_[s]);
         const double d[3] = {xi - x_[3 * j], yi - x_[3 * j + 1], zi - x_[3 * j + 2]};
@@ -581,11 +583,15 @@ void DemSimulation::pairForces() {
         const ContactResult res =
             contactForce<N, R>(model_, layout_, laws_i[material_[j]], nb_stiff_[s], k, dt, hist, false);
         for (int c = 0; c < 3; ++c) {
-          F[3 * i + c] += res.force[c];
+          fi[c] += res.force[c];
           F[3 * j + c] -= res.force[c];
-          Tq[3 * i + c] += res.torque_i[c];
+          ti[c] += res.torque_i[c];
           Tq[3 * j + c] += res.torque_j[c];
         }
+      }
+      for (int c = 0; c < 3; ++c) {
+        F[3 * i + c] += fi[c];
+        Tq[3 * i + c] += ti[c];
       }
     }
     thread_max[tid] = local_max;

@@ -201,8 +201,10 @@ TEST_CASE("dragging the tool through the soil loads it against the travel, more 
 
   // Magnitude at 20 mm against Rankine's passive pressure on the 40 mm wide plate, with the unit
   // weight of the settled soil and the assembly's friction angle bracketed by 20-45 degrees
-  // (Kp = (1 + sin phi) / (1 - sin phi)); the upper end allows 50 % more for the side wedges of a
-  // 3D cut and the friction on the plate's faces.
+  // (Kp = (1 + sin phi) / (1 - sin phi)). The upper end allows for what a 2D continuum misses: the
+  // tip engages grains centred up to a radius below it (depth d + R), and the side wedges of a 3D
+  // cut and the friction on the plate's faces add up to 50 %. The bracket is wide because the mean
+  // of one chaotic realisation in a bin of a few hundred grains scatters by tens of percent.
   const auto settled = builtin::readSettledSoil(builtin::soilFile(deep, soil_dir.dir));
   double solid_volume = 0;
   for (const auto& p : settled.particles) solid_volume += 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius, 3);
@@ -212,7 +214,9 @@ TEST_CASE("dragging the tool through the soil loads it against the travel, more 
     const double s = std::sin(phi_deg * std::numbers::pi / 180);
     return (1 + s) / (1 - s);
   };
-  const double rankine = 0.5 * gamma * 0.02 * 0.02 * deep.tools[0].geometry.width_m;
+  const double width = deep.tools[0].geometry.width_m, depth = 0.02, grain = soil.diameter_max_m / 2;
+  const double rankine = 0.5 * gamma * depth * depth * width;
+  const double rankine_tip = 0.5 * gamma * (depth + grain) * (depth + grain) * width;
   CHECK(-d20.mean_N > rankine * kp(20));
-  CHECK(-d20.mean_N < 1.5 * rankine * kp(45));
+  CHECK(-d20.mean_N < 1.5 * rankine_tip * kp(45));
 }
