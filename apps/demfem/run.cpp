@@ -104,7 +104,11 @@ fs::path siblingExecutable(const std::string& name) {
   return exe;
 }
 
-[[noreturn]] void endBySignal(int signal) {
+// Ends this process by `signal` (so the caller's shell sees how it ended). Raising it skips the
+// destructors, so the run's temporary directory is removed here first.
+[[noreturn]] void endBySignal(int signal, const fs::path& work_dir) {
+  std::error_code ec;
+  fs::remove_all(work_dir, ec);
   std::signal(signal, SIG_DFL);
   std::raise(signal);
   std::abort();
@@ -134,7 +138,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   while (!fs::exists(endpoint_file)) {
     if (const int sig = g_forward_signal) {
       dem.stop(5s);
-      endBySignal(sig);
+      endBySignal(sig, work);
     }
     if (dem.poll()) throw std::runtime_error("demfem-dem stopped before serving (" + dem.outcome() + ")");
     std::this_thread::sleep_for(20ms);
@@ -168,7 +172,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
     }
     std::this_thread::sleep_for(20ms);
   }
-  if (forwarded) endBySignal(forwarded);
+  if (forwarded) endBySignal(forwarded, work);
   if (!fem.succeeded() || !dem.succeeded())
     throw std::runtime_error("coupled run failed: demfem-fem " + fem.outcome() + ", demfem-dem " + dem.outcome() +
                              " (see their messages above; outputs are marked incomplete)");

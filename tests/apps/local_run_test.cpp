@@ -39,5 +39,7 @@ TEST_CASE("Ctrl-C on demfem run stops both processes and marks the outputs incom
   CHECK(WTERMSIG(status) == SIGINT);
   CHECK(readText(dir / "out" / "sensors.csv").find("\n# incomplete: ") != std::string::npos);
   CHECK(nlohmann::json::parse(readText(dir / "out" / "sensors.json"))["complete"] == false);
+  // Its temporary directory (the ipc socket) is gone too, although the signal skipped destructors.
+  CHECK_FALSE(fs::exists(fs::temp_directory_path() / ("demfem-run-" + std::to_string(run.pid()))));
   fs::remove_all(dir);
 }

@@ -65,6 +65,7 @@ class Process {
     }
   }
   void signal(int sig) { if (!status_) kill(pid_, sig); }
+  pid_t pid() const { return pid_; }
   bool exited() {
     int status = 0;
     if (!status_ && waitpid(pid_, &status, WNOHANG) == pid_) status_ = status;
