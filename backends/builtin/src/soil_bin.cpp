@@ -1,11 +1,13 @@
 #include "demfem/backends/builtin/soil_bin.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <numbers>
+#include <numeric>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -223,7 +225,20 @@ std::filesystem::path defaultSoilDirectory() {
 }
 
 void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const SettledSoil& settled) {
-  for (const auto& p : settled.particles) {
+  // Added in spatial order (cells one diameter wide; x fastest, then y, then z along the bin): a
+  // particle's neighbours are then within a slab of about 200 indices instead of a deposition
+  // lattice layer (about 1,300 in the paper bin), so the pair loop's working set stays in L1/L2.
+  const double cell = soil.diameter_max_m;
+  const auto key = [cell](const SettledParticle& p) {
+    return std::array<long, 3>{std::lround(std::floor(p.x[2] / cell)), std::lround(std::floor(p.x[1] / cell)),
+                               std::lround(std::floor(p.x[0] / cell))};
+  };
+  std::vector<std::size_t> order(settled.particles.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return key(settled.particles[a]) < key(settled.particles[b]); });
+  for (const std::size_t k : order) {
+    const auto& p = settled.particles[k];
     if (p.layer < 0 || p.layer >= static_cast<int>(soil.layers.size()))
       throw std::runtime_error("settled soil: layer " + std::to_string(p.layer) + " not in /soil/layers");
     ParticleState s;

@@ -71,7 +71,8 @@ std::filesystem::path soilFile(const study::Study& study, const std::filesystem:
 // DEMFEM_SOIL_DIR if set, else "soil" in the working directory.
 std::filesystem::path defaultSoilDirectory();
 
-// Adds the settled particles to `sim` with their layer materials.
+// Adds the settled particles to `sim` with their layer materials, in spatial order (cells of one
+// diameter, x fastest, then y, then z), not in the file's order.
 void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const SettledSoil& settled);
 
 }  // namespace demfem::builtin
