@@ -36,7 +36,7 @@ fs::path freshDir(const std::string& name) {
 
 TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]") {
   const fs::path dir = freshDir("ipc");
-  for (const std::string endpoint : {std::string("inproc://transport-test"), "ipc://" + (dir / "s").string(),
+  for (const std::string& endpoint : {std::string("inproc://transport-test"), "ipc://" + (dir / "s").string(),
                                      std::string("tcp://127.0.0.1:*")}) {
     zmq::context_t context(1);
     ServerSocket server(context, endpoint);
