@@ -12,7 +12,7 @@
 // (--settle-J; the LIGGGHTS benchmark's threshold: timing needs a bin at rest, not a study's 1e-6 J). The tool is inserted to its depth (untimed),
 // then each thread count is timed over the same number of drag steps from that state. Prints a
 // table; --json FILE writes the figures (units in the keys).
-#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/cli/cli_support.hpp"
@@ -44,13 +44,7 @@ struct ModelCase {
 };
 
 TriangleMesh plateMesh(const study::Tool& tool, int material) {
-  const auto s = adapter::makePlateSurface(tool.geometry.length_m, tool.geometry.width_m, tool.geometry.thickness_m,
-                                           tool.geometry.keypoint_spacing_m);
-  TriangleMesh mesh;
-  mesh.name = tool.name;
-  for (const auto& n : s.nodes) mesh.rest_nodes.push_back({n[0], n[1], n[2]});
-  mesh.nodes = mesh.rest_nodes;
-  mesh.triangles = s.triangles;
+  TriangleMesh mesh = toolMesh(tool);
   mesh.material = material;
   return mesh;
 }

@@ -19,20 +19,6 @@ using adapter::ErrorCode;
 constexpr char kCheckpointMagic[8] = {'D', 'F', 'B', 'K', 'E', 'N', 'D', '1'};
 constexpr double kInsertionClearance_m = 0.005;  // tool tip starts this far above the fill surface
 
-TriangleMesh toolMesh(const study::Tool& tool) {
-  if (tool.geometry.kind != study::GeometryKind::Plate)
-    throw CouplingError(ErrorCode::Unsupported, "builtin DEM: tool '" + tool.name +
-                                                    "': only plate tools are meshed by the builtin backend so far");
-  const auto surface = adapter::makePlateSurface(tool.geometry.length_m, tool.geometry.width_m, tool.geometry.thickness_m,
-                                                 tool.geometry.keypoint_spacing_m);
-  TriangleMesh mesh;
-  mesh.name = tool.name;
-  for (const auto& n : surface.nodes) mesh.rest_nodes.push_back({n[0], n[1], n[2]});
-  mesh.nodes = mesh.rest_nodes;
-  mesh.triangles = surface.triangles;
-  return mesh;
-}
-
 class BuiltinBackend final : public adapter::CouplingApi {
  public:
   BuiltinBackend(const study::Study& study, const SettledSoil& soil)
@@ -277,6 +263,20 @@ class BuiltinBackend final : public adapter::CouplingApi {
 };
 
 }  // namespace
+
+TriangleMesh toolMesh(const study::Tool& tool) {
+  if (tool.geometry.kind != study::GeometryKind::Plate)
+    throw CouplingError(ErrorCode::Unsupported, "builtin DEM: tool '" + tool.name +
+                                                    "': only plate tools are meshed by the builtin backend so far");
+  const auto surface = adapter::makePlateSurface(tool.geometry.length_m, tool.geometry.width_m, tool.geometry.thickness_m,
+                                                 tool.geometry.keypoint_spacing_m);
+  TriangleMesh mesh;
+  mesh.name = tool.name;
+  for (const auto& n : surface.nodes) mesh.rest_nodes.push_back({n[0], n[1], n[2]});
+  mesh.nodes = mesh.rest_nodes;
+  mesh.triangles = surface.triangles;
+  return mesh;
+}
 
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study) {
   try {

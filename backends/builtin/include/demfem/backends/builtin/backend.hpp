@@ -2,6 +2,7 @@
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"
+#include "demfem/backends/builtin/triangle_mesh.hpp"
 #include "demfem/study/study.hpp"
 
 #include <memory>
@@ -11,5 +12,10 @@ namespace demfem::builtin {
 // Builds the DEM simulation of `study` (soil, bin, tools at their start positions) ready for the
 // coupling cycle. Throws adapter::CouplingError on a study this backend cannot run.
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study);
+
+// The DEM mesh of a tool: the plate's keypoint triangulation shared with the FEM
+// (adapter/plate_surface.hpp), local frame, material not yet set. Throws
+// adapter::CouplingError(Unsupported) for geometries the builtin backend does not mesh.
+TriangleMesh toolMesh(const study::Tool& tool);
 
 }  // namespace demfem::builtin
