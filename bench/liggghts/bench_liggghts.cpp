@@ -67,6 +67,10 @@ constexpr double kInsertionVelocity_m_s = 0.3;
 // Settling threshold of the benchmark's soil (J); 0: the study's soil.settle_kinetic_energy_J.
 double g_settle_kinetic_energy_J = 0;
 
+// LIGGGHTS drags through the built-in backend's settled soil of the same seed (1 thread) instead of
+// its own: the two contact implementations on the same particles.
+bool g_liggghts_on_builtin_soil = false;
+
 study::Study benchStudy(const std::string& file, std::uint64_t seed, int cores) {
   study::Study s = study::loadStudy(file);
   if (g_settle_kinetic_energy_J > 0) s.soil.settle_kinetic_energy_J = g_settle_kinetic_energy_J;
@@ -118,11 +122,15 @@ RunResult runBuiltin(const std::string& file, std::uint64_t seed, int cores, dou
 // Rank 0 of a LIGGGHTS run (the worker under mpirun); followers return {}.
 std::optional<RunResult> runLiggghts(const std::string& file, std::uint64_t seed, double window_s) {
   const auto s = benchStudy(file, seed, 1);
+  liggghts::BackendOptions options;  // every rank builds the same simulation, so the same options
+  if (g_liggghts_on_builtin_soil)
+    for (const auto& p : builtin::readSettledSoil(builtin::soilFile(s, builtin::defaultSoilDirectory())).particles)
+      options.settled_soil.push_back({p.x, p.radius, s.soil.layers[static_cast<std::size_t>(p.layer)].material});
   if (!liggghts::isLeaderRank()) {
-    liggghts::followLeader(s);
+    liggghts::followLeader(s, options);
     return std::nullopt;
   }
-  auto dem = liggghts::makeBackend(s);
+  auto dem = liggghts::makeBackend(s, options);
   int ranks = 1;
   if (const char* size = std::getenv("OMPI_COMM_WORLD_SIZE")) ranks = std::atoi(size);
   std::vector<std::array<double, 2>> y_and_radius;
@@ -149,6 +157,7 @@ RunResult runLiggghtsRanks(const std::string& file, std::uint64_t seed, int rank
                               DEMFEM_MPIEXEC + " -np " + std::to_string(ranks) + " --oversubscribe '" + self.string() +
                               "' --study '" + file + "' --worker " + std::to_string(seed) + " --window-s " + window +
                               " --settle-kinetic-energy-J " + settle +
+                              (g_liggghts_on_builtin_soil ? " --liggghts-on-builtin-soil" : "") +
                               " --json '" + result.string() + "'";
   if (std::system(command.c_str()) != 0) throw std::runtime_error("the LIGGGHTS run under mpirun failed: " + command);
   std::ifstream in(result);
@@ -195,6 +204,8 @@ int main(int argc, char** argv) {
                  "Deposition ends below this kinetic energy (J), both backends (LIGGGHTS: translational only); "
                  "default: the study's")
       ->check(CLI::NonNegativeNumber);
+  app.add_flag("--liggghts-on-builtin-soil", g_liggghts_on_builtin_soil,
+               "LIGGGHTS starts from the built-in backend's settled soil of the same seed (same particles)");
   app.add_option("--worker", worker_seed, "Internal: run LIGGGHTS with this seed as an MPI job and write --json");
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
@@ -246,6 +257,7 @@ int main(int argc, char** argv) {
     cli::writeJson(json_target, {{"study", file},
                                  {"window_s", window_s},
                                  {"settle_kinetic_energy_J", benchStudy(file, 1, 1).soil.settle_kinetic_energy_J},
+                                 {"liggghts_on_builtin_soil", g_liggghts_on_builtin_soil},
                                  {"runs", all},
                                  {"summary", summary}});
   });

@@ -458,18 +458,21 @@ class Engine {
       writeToolStl(tool.surface, tool.motion.origin_m, work_dir_ / ("tool" + std::to_string(g) + ".stl"));
       tools_.push_back(std::move(tool));
     }
-    for (const auto& probe : options.probes) {
-      if (!std::any_of(study.soil.layers.begin(), study.soil.layers.end(),
-                       [&probe](const study::Layer& l) { return l.material == probe.material; }))
-        throw CouplingError(ErrorCode::BadRequest, "probe sphere material \"" + probe.material +
-                                                       "\" is not a particle material of the study");
-      if (!(probe.radius_m > 0)) throw CouplingError(ErrorCode::BadRequest, "probe sphere radius must be positive");
-    }
+    for (const auto* spheres : {&options.probes, &options.settled_soil})
+      for (const auto& sphere : *spheres) {
+        const std::string what = spheres == &options.probes ? "probe sphere" : "settled-soil particle";
+        if (!std::any_of(study.soil.layers.begin(), study.soil.layers.end(),
+                         [&sphere](const study::Layer& l) { return l.material == sphere.material; }))
+          throw CouplingError(ErrorCode::BadRequest, what + " material \"" + sphere.material +
+                                                         "\" is not a particle material of the study");
+        if (!(sphere.radius_m > 0)) throw CouplingError(ErrorCode::BadRequest, what + " radius must be positive");
+      }
 
     if (options.probes.empty()) {
       // The settled soil is read from its file or deposited in an instance of its own, so that the
       // simulation below starts from the same state either way (positions only, at rest).
-      const SettledParticles soil = settledSoil(study, deck, options);
+      const SettledParticles soil =
+          options.settled_soil.empty() ? settledSoil(study, deck, options) : givenSoil(study, options.settled_soil);
       openMainInstance(deck);
       command("fix integrate all nve/sphere");
       std::map<int, double> density_of_type;
@@ -563,6 +566,14 @@ class Engine {
     MPI_Bcast(&count, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
     particles.resize(count);
     MPI_Bcast(particles.data(), static_cast<int>(count), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    return particles;
+  }
+
+  static SettledParticles givenSoil(const study::Study& study, const std::vector<Sphere>& spheres) {
+    SettledParticles particles;
+    for (const auto& p : spheres)
+      particles.insert(particles.end(), {p.centre_m[0], p.centre_m[1], p.centre_m[2], p.radius_m,
+                                         static_cast<double>(atomType(study, p.material))});
     return particles;
   }
 

@@ -55,6 +55,18 @@ TEST_CASE("a second construction reads the saved soil instead of depositing and 
   for (std::size_t k = 2; k < loaded.drag_forces.size(); k += 3) draught -= loaded.drag_forces[k];
   CHECK(draught > 0);  // the drag touched the soil: the comparison of forces is not between zeros
 
+  SECTION("a given settled soil replaces the cached one") {
+    liggghts::BackendOptions given;
+    given.soil_directory = options.soil_directory;
+    for (const auto& p : deposited.particles) given.settled_soil.push_back({{p[0], p[1], p[2]}, p[3], "soil"});
+    given.settled_soil.pop_back();  // one particle fewer: not the cached soil
+    auto backend = liggghts::makeBackend(study, given);
+    CHECK(liggghts::soilOrigin(*backend).file.empty());
+    auto expected = deposited.particles;
+    expected.pop_back();
+    CHECK(liggghts::particles(*backend) == expected);
+  }
+
   SECTION("a damaged soil file is reported, not replaced") {
     const fs::path file = liggghts::soilOrigin(*liggghts::makeBackend(study, options)).file;
     fs::resize_file(file, fs::file_size(file) / 2);

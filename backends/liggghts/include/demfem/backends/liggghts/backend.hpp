@@ -38,22 +38,26 @@
 
 namespace demfem::liggghts {
 
-// A sphere held fixed in the bin (bin frame, metres), of a particle material of the study.
-struct ProbeSphere {
+// A sphere in the bin (bin frame, metres) of a particle material of the study.
+struct Sphere {
   std::array<double, 3> centre_m{};
   double radius_m = 0;
   std::string material;
 };
+using ProbeSphere = Sphere;  // held fixed
 
 struct BackendOptions {
   // Empty: deposit the study's soil. Otherwise: only these fixed spheres (contact-law checks).
   std::vector<ProbeSphere> probes;
   // Where settled soils are kept; empty: $DEMFEM_SOIL_DIR if set, else "soil" in the working directory.
   std::filesystem::path soil_directory;
+  // Non-empty: the settled soil to start from (particles at rest) instead of the cached or deposited
+  // one, e.g. another backend's, to compare the two on the same particles. No soil file is used.
+  std::vector<Sphere> settled_soil;
 };
 
 // The settled-soil file of a backend and whether its construction deposited the soil and wrote the
-// file (true) or read it (false). Empty file for a probe backend.
+// file (true) or read it (false). Empty file for a probe backend or a given settled_soil.
 struct SoilOrigin {
   std::filesystem::path file;
   bool deposited = false;
