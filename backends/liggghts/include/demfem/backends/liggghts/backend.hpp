@@ -87,8 +87,9 @@ std::vector<std::array<double, 4>> particles(adapter::CouplingApi& backend);
 // MPI (`mpirun -np N demfem-dem --backend liggghts ...`): every rank runs demfem-dem. The leader
 // (rank 0) serves the protocol and calls the backend built by makeBackend(); every other rank calls
 // followLeader(), which builds its part of the same simulation, executes the operations the leader
-// broadcasts and returns after the leader's shutdown(). isLeaderRank() initialises MPI if needed;
-// it is true when not started under mpirun.
+// broadcasts and returns after the leader's shutdown(); it must get the study and options the
+// leader's makeBackend() got (construction is collective). isLeaderRank() initialises MPI if
+// needed; it is true when not started under mpirun.
 bool isLeaderRank();
 void followLeader(const study::Study& study);
 void followLeader(const study::Study& study, const BackendOptions& options);
