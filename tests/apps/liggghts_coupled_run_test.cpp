@@ -25,7 +25,7 @@ using namespace demfem::testing;
 namespace {
 
 // Small, fast variant of studies/quick_liggghts.json (same laws, materials, layers, tool material
-// and FEM settings): a 140 x 80 mm bin filled 40 mm deep (about 400 particles), a 120 x 20 mm PMMA
+// and FEM settings): a 140 x 80 mm bin filled 40 mm deep (about 480 particles), a 120 x 20 mm PMMA
 // tool (250 keypoints) inserted 18 mm deep at 300 mm/s and dragged 40 mm at 100 mm/s (400 FEM steps
 // of 1 ms).
 fs::path smallLiggghtsStudy(const fs::path& dir) {
