@@ -71,6 +71,11 @@ double g_settle_kinetic_energy_J = 0;
 // its own: the two contact implementations on the same particles.
 bool g_liggghts_on_builtin_soil = false;
 
+// Length of one simulate() call (s); 0: the study's FEM step, as a coupled run calls it. A call as
+// long as the window times the engines alone: LIGGGHTS then does its run set-up (`pre yes`) once
+// instead of once per coupling interval.
+double g_interval_s = 0;
+
 study::Study benchStudy(const std::string& file, std::uint64_t seed, int cores) {
   study::Study s = study::loadStudy(file);
   if (g_settle_kinetic_energy_J > 0) s.soil.settle_kinetic_energy_J = g_settle_kinetic_energy_J;
@@ -85,11 +90,12 @@ study::Study benchStudy(const std::string& file, std::uint64_t seed, int cores) 
   return s;
 }
 
-// Insertion (untimed), then the drag window in FEM-step-sized simulate() calls, as a coupled run does.
+// Insertion (untimed), then the drag window in simulate() calls of g_interval_s (default: FEM-step
+// sized, as a coupled run does).
 RunResult drag(adapter::CouplingApi& dem, const study::Study& s, double window_s, std::int64_t particles) {
   const auto& tool = s.tools.front();
   liggghts::insertAndStartDrag(dem, s, tool);
-  const double interval = s.fem.dt_s > 0 ? s.fem.dt_s : 1e-3;
+  const double interval = g_interval_s > 0 ? g_interval_s : (s.fem.dt_s > 0 ? s.fem.dt_s : 1e-3);
   const auto intervals = std::max<long>(1, std::lround(window_s / interval));
   const double t0 = dem.time();
   RunResult r;
@@ -151,12 +157,14 @@ RunResult runLiggghtsRanks(const std::string& file, std::uint64_t seed, int rank
   std::snprintf(window, sizeof window, "%.17g", window_s);
   char settle[64];
   std::snprintf(settle, sizeof settle, "%.17g", g_settle_kinetic_energy_J);
+  char interval[64];
+  std::snprintf(interval, sizeof interval, "%.17g", g_interval_s);
   // --oversubscribe: the ranks may outnumber the cores mpirun counts; running as root (containers)
   // needs OpenMPI's explicit consent.
   const std::string command = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") +
                               DEMFEM_MPIEXEC + " -np " + std::to_string(ranks) + " --oversubscribe '" + self.string() +
                               "' --study '" + file + "' --worker " + std::to_string(seed) + " --window-s " + window +
-                              " --settle-kinetic-energy-J " + settle +
+                              " --settle-kinetic-energy-J " + settle + " --interval-s " + interval +
                               (g_liggghts_on_builtin_soil ? " --liggghts-on-builtin-soil" : "") +
                               " --json '" + result.string() + "'";
   if (std::system(command.c_str()) != 0) throw std::runtime_error("the LIGGGHTS run under mpirun failed: " + command);
@@ -203,6 +211,10 @@ int main(int argc, char** argv) {
   app.add_option("--settle-kinetic-energy-J", g_settle_kinetic_energy_J,
                  "Deposition ends below this kinetic energy (J), both backends (LIGGGHTS: translational only); "
                  "default: the study's")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--interval-s", g_interval_s,
+                 "Simulated time per simulate() call (s); default: the study's FEM step. Equal to --window-s: "
+                 "one call, the engines' own speed without per-call set-up")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--liggghts-on-builtin-soil", g_liggghts_on_builtin_soil,
                "LIGGGHTS starts from the built-in backend's settled soil of the same seed (same particles)");
@@ -256,6 +268,7 @@ int main(int argc, char** argv) {
     for (const auto& r : runs) all.push_back(toJson(r));
     cli::writeJson(json_target, {{"study", file},
                                  {"window_s", window_s},
+                                 {"interval_s", g_interval_s},
                                  {"settle_kinetic_energy_J", benchStudy(file, 1, 1).soil.settle_kinetic_energy_J},
                                  {"liggghts_on_builtin_soil", g_liggghts_on_builtin_soil},
                                  {"runs", all},
