@@ -237,9 +237,9 @@ template <study::NormalModel N, study::RollingModel R>
     const double rsht = dot3(sh, k.n);
     for (int c = 0; c < 3; ++c) sh[c] -= rsht * k.n[c];
     for (int c = 0; c < 3; ++c) ft[c] = -s.kt * sh[c];
-    const double shear_force = s.kt * std::sqrt(dot3(sh, sh));
-    if (shear_force > limit) {
-      const double ratio = shear_force > 0 ? limit / shear_force : 0.0;
+    const double shear_force2 = s.kt * s.kt * dot3(sh, sh);
+    if (shear_force2 > limit * limit) {  // squares: no square root while the contact sticks
+      const double ratio = limit / std::sqrt(shear_force2);
       for (int c = 0; c < 3; ++c) {
         ft[c] *= ratio;
         sh[c] = -ft[c] / s.kt;
