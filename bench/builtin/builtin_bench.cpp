@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
   app.add_option("--threads", thread_counts, "Thread counts to time");
   double settle_J = 1e-3;
   app.add_option("--settle-J", settle_J,
-                 "Kinetic energy (J) below which the benchmark soil counts as settled )")
+                 "Kinetic energy (J) below which the benchmark soil counts as settled")
       ->check(CLI::PositiveNumber);
   std::vector<std::string> only;
   app.add_option("--model", only, "Time only these models (labels as printed; default: all)");
