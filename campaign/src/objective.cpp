@@ -14,20 +14,14 @@ double standardError(const analysis::SignalStatistics& s) {
   return s.samples > 0 ? s.std_dev / std::sqrt(static_cast<double>(s.samples)) : 0.0;
 }
 
-// Samples in the steady tail of a run of `size` samples (step_response.hpp).
-std::size_t tailSamples(std::size_t size, const analysis::StepResponseSettings& s) {
-  const auto fraction = static_cast<std::size_t>(s.steady_fraction * static_cast<double>(size));
-  return std::min(size, std::max(s.min_tail_samples, fraction));
-}
-
 void addCalibrationTargets(const analysis::CalibrationCase& c, const analysis::EvaluationResult& measured, const ObjectiveSettings& s,
                            std::vector<Target>& out) {
-  double force_error = 0, deformation_error = 0;  // largest standard error of a repeat's steady value
+  // Largest standard error of a repeat's steady value, as the whole-record fit gives it.
+  double force_error = 0, deformation_error = 0;
   for (const auto& run : measured.calibration_runs) {
     if (run.key != c.key) continue;
-    const double root_n = std::sqrt(static_cast<double>(tailSamples(run.time_s.size(), s.analysis.step_response)));
-    force_error = std::max(force_error, run.force.steady_std / root_n);
-    deformation_error = std::max(deformation_error, run.deformation.steady_std / root_n);
+    force_error = std::max(force_error, run.force.fit.steady_error);
+    deformation_error = std::max(deformation_error, run.deformation.fit.steady_error);
   }
   const auto steady = [&](const char* name, const analysis::SignalStatistics& st, double run_error) {
     const double between = st.samples > 1 ? st.std_dev : 0.0;
