@@ -45,7 +45,12 @@ std::vector<campaign::Stage> stagesOf(const CalibrateOptions& o, const nlohmann:
   return {stage};
 }
 
+// At most one progress line per second (and at every new start).
 void progress(const campaign::CalibrationProgress& p) {
+  static double last_s = -1;
+  static int last_start = 0;
+  if (p.start == last_start && p.elapsed_s < last_s + 1) return;
+  last_s = p.elapsed_s, last_start = p.start;
   std::fprintf(stderr, "\rcalibrate: evaluation %d (budget %d), start %d/%d, best chi2 %.4g, %.0f s elapsed, at most %.0f s left   ",
                p.evaluation, p.max_evaluations, p.start, p.starts, p.best_chi2, p.elapsed_s, p.eta_s);
 }
