@@ -42,7 +42,8 @@ double weighted(const std::vector<std::pair<int, double>>& weights, const Eigen:
 
 }  // namespace
 
-Sensors::Sensors(const ReducedModel& model, double sensor_from_top_m) {
+Sensors::Sensors(const ReducedModel& model, const study::Tool& tool) : gains_(tool.sensors) {
+  const double sensor_from_top_m = tool.constraints.sensor_from_top_m;
   for (int dof : model.constraints.load_cell_dofs)
     if (dof % 3 == 2) load_cell_z_dofs_.push_back(dof);
   if (load_cell_z_dofs_.empty()) throw std::invalid_argument("sensors: the model has no load-cell z constraint");
@@ -71,7 +72,8 @@ Sensors::Sensors(const ReducedModel& model, double sensor_from_top_m) {
 SensorReadings Sensors::read(const Eigen::VectorXd& displacement, const Eigen::VectorXd& reactions) const {
   SensorReadings s;
   for (int dof : load_cell_z_dofs_) s.load_cell_N += reactions(dof);
-  s.deformation_mm = -1000 * weighted(sensor_z_weights_, displacement);
+  s.deformation_mm = -1000 * weighted(sensor_z_weights_, displacement) * gains_.deformation_gain;
+  s.load_cell_N *= gains_.force_gain;
   s.tip_tilt_deg = std::atan(-weighted(tip_slope_weights_, displacement)) * 180 / std::numbers::pi;
   return s;
 }
