@@ -12,11 +12,11 @@
 //   damping difference from the light weight (higher frequency) to the heavy one (lower frequency),
 //   and stiffness_consistency = frequency_ratio^2 x deformation_ratio averaged over the weights
 //   (1 when only the stiffness scale is wrong: f ~ sqrt(k), d ~ 1 / k).
-//   What the causes leave (issue of the diagnosis, docs/diagnosis.md): a wrong Young's modulus
-//   changes frequency and deformation together and leaves force per weight alone; a compliant clamp
-//   changes force per weight (the load cell takes more); a sensor gain changes one channel's ratio
-//   and nothing else; mass-proportional damping raises the damping difference more at the heavy
-//   weight, stiffness-proportional damping more at the light one.
+//   What the causes leave (docs/diagnosis.md): a wrong Young's modulus changes frequency and
+//   deformation together and leaves force per weight alone; a compliant clamp changes force per
+//   weight (the clamp carries less moment, the load cell less force); a sensor gain changes one
+//   channel's ratio and nothing else; mass-proportional damping raises the damping difference more
+//   at the heavy weight, stiffness-proportional damping more at the light one.
 //
 // Soil-bin runs (Sections 2.3, 3.6), per depth: bias of the window means 100 (sim - meas) / meas of
 // force and deformation; the end-of-stroke rise (mean force over the last `end_fraction` of each
