@@ -8,9 +8,10 @@
 //   the recordings must be runnable by the study's kind, otherwise ArgumentError naming the case.
 // - Objective: chi2 of objective.hpp over all cases of all recordings.
 // - Optimiser (optimiser coordinates x in [0, 1]^n, parameters.hpp): `starts` starts, the first at
-//   the study's own values (clamped into the bounds), the others on a scrambled low-discrepancy
-//   sequence; each a local NLopt run: BOBYQA for smooth objectives (weight drops), Subplex for noisy
-//   ones (DEM, ObjectiveKind::Noisy); relative x tolerance `x_tolerance`, at most `max_evaluations`
+//   the study's own values (clamped into the bounds), the others at the points of a Halton
+//   sequence; each a local NLopt run: BOBYQA (COBYLA for one parameter) for smooth objectives
+//   (weight drops), Subplex for noisy ones (DEM, ObjectiveKind::Noisy); absolute x tolerance
+//   `x_tolerance`, initial step 0.1, at most `max_evaluations`
 //   per start. Cases of one evaluation run concurrently on `jobs` threads.
 // - Every model run goes through the RunCache in `cache_dir` (empty = none): a repeated or resumed
 //   calibration reruns nothing already run.
@@ -20,7 +21,8 @@
 //   value * ln(hi / lo) * sigma_x).
 // - Identification (Roessler et al. 2019): a parameter is "unidentified" when its one-sigma interval
 //   in optimiser coordinates is wider than `unidentified_fraction` of the bounds, or H is singular
-//   along it; it is then reported without a value and the study keeps its original value. Distinct
+//   along it; it is then reported without a value (the calibrated study carries the best point
+//   found, one of many that fit equally well). Distinct
 //   minima: local minima of the starts whose chi2 is within `noise_chi2` of the best and that lie
 //   more than three standard deviations apart in some parameter are all listed (non-unique fit).
 // - Stop request: `stop_requested` is polled before each evaluation; the calibration then throws
@@ -80,6 +82,7 @@ struct FittedParameter {
   ParameterSpec spec;
   double initial = 0;              // the study's value
   std::optional<double> value;     // absent: unidentified
+  double best = 0;                 // the best point found (what the calibrated study carries)
   double std_dev = 0;              // file units (infinite when unidentified)
   bool identified = true;
 };
@@ -136,10 +139,10 @@ struct Stage {
 std::vector<Stage> weightDropPreset(const nlohmann::ordered_json& study, const std::vector<analysis::Recording>& recordings);
 
 // `--preset layered-soil` (Section 2.10.2): depths of the soil-bin recordings ascending; at each
-// depth the static and rolling friction of the particle material of the deepest layer the tool tip
-// reaches (its particle-particle and particle-tool interactions), the shallower layers kept from
-// the previous stage; static friction 0.05-1.5, rolling friction 0.0-0.5. A layer already fitted at a
-// shallower depth is not refitted. Throws ArgumentError without soil-bin cases or for a study
+// depth the static and rolling friction (Table 4: the particle-particle interaction) of the
+// material of the deepest layer the tool tip reaches, the shallower layers kept from the previous
+// stage; static friction 0.05-1.5, rolling friction 0-0.5 (not fitted with contact.rolling =
+// "none"). A depth whose deepest layer was fitted at a shallower depth adds no stage. Throws ArgumentError without soil-bin cases or for a study
 // without soil.
 std::vector<Stage> layeredSoilPreset(const nlohmann::ordered_json& study, const std::string& origin,
                                      const std::vector<analysis::Recording>& recordings);

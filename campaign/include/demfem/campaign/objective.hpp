@@ -1,14 +1,15 @@
 // demfem campaign: the calibration objective, per quantity and case, weighted by the measured
 // scatter (docs/calibration.md).
 //
-// Quantities (analysis::evaluate() on measured and simulated recordings alike):
+// Quantities (analysis::evaluate() on measured and simulated recordings alike; docs/analysis.md):
 // - calibration-weight case: steady force_N, steady deformation_mm, frequency_Hz and damping ratio
 //   of the deformation signal (Section 2.10.1, Fig. 8);
 // - soil-bin case: window mean and window standard deviation of force_N and deformation_mm over the
 //   Section 2.3 window (Fig. 15).
 // Residual r = (simulated - measured) / sigma, with sigma the measured scatter of the quantity:
-// - steady values and window means: the standard deviation between the repeats' values (one
-//   repeat: the standard deviation of the tail / window samples divided by sqrt(samples));
+// - steady values and window means: the larger of the standard deviation between the repeats'
+//   values (two or more repeats) and the standard error of the tail / window samples
+//   (their standard deviation over sqrt(samples));
 // - frequency and damping ratio: the standard deviation of the per-cycle estimates over all repeats
 //   divided by sqrt(cycles) (the scatter of their mean);
 // - window spreads: spread / sqrt(2 (samples - 1)) (the sampling error of a standard deviation);
@@ -28,6 +29,7 @@ namespace demfem::campaign {
 struct ObjectiveSettings {
   analysis::AnalysisSettings analysis;
   double relative_floor = 1e-3;  // sigma >= relative_floor * |measured|
+  bool soil_deformation = true;  // soil-bin deformation quantities (false for a rigid tool)
 };
 
 struct Residual {
@@ -49,11 +51,14 @@ struct Target {
 // case lacks what a quantity needs (e.g. a weight recording with fewer than two cycles).
 std::vector<Target> targets(const analysis::EvaluationResult& measured, const ObjectiveSettings& settings);
 
+// analysis::evaluate() case by case: a simulated run that cannot be evaluated (e.g. no oscillation
+// to count) is left out instead of failing the whole evaluation.
+analysis::EvaluationResult evaluateEach(const std::vector<analysis::Recording>& runs, const ObjectiveSettings& settings);
+
 // Residuals of `simulated` (one run per case) against `targets`. A target whose case is missing in
 // `simulated`, or whose simulated quantity cannot be evaluated (no oscillation), gets the residual
 // of a simulated value of 0 (a large but finite penalty, so the optimiser can leave the region).
-std::vector<Residual> residuals(const std::vector<Target>& targets, const analysis::EvaluationResult& simulated,
-                                const ObjectiveSettings& settings);
+std::vector<Residual> residuals(const std::vector<Target>& targets, const analysis::EvaluationResult& simulated);
 
 double chi2(const std::vector<Residual>& residuals);
 
