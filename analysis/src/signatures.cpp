@@ -6,21 +6,24 @@
 namespace demfem::analysis {
 namespace {
 
-double standardError(const SignalStatistics& s) {
-  return s.samples > 1 ? s.std_dev / std::sqrt(static_cast<double>(s.samples)) : 0.0;
-}
-
-// Steady value's standard error: spread between repeats, or for one repeat its tail's spread over
-// the square root of the tail's samples.
-double steadyError(const ResponseSummary& summary, const std::vector<CalibrationRun>& runs, const CaseKey& key, bool force) {
-  if (summary.steady.samples > 1) return standardError(summary.steady);
+// Standard error of a case's mean of one fitted figure (step_fit.hpp) over its repeats: the larger
+// of the propagated fit errors and the spread between repeats over sqrt(repeats).
+double caseError(const std::vector<CalibrationRun>& runs, const CaseKey& key, bool force, double StepResponseFit::*value,
+                 double StepResponseFit::*error) {
+  std::vector<double> values;
+  double variance = 0;
   for (const CalibrationRun& run : runs) {
     if (run.key != key) continue;
-    const StepResponse& r = force ? run.force : run.deformation;
-    const double tail = std::max(1.0, 0.2 * static_cast<double>(run.time_s.size()));
-    return r.steady_std / std::sqrt(tail);
+    const StepResponseFit& fit = (force ? run.force : run.deformation).fit;
+    values.push_back(fit.*value);
+    variance += (fit.*error) * (fit.*error);
   }
-  return 0.0;
+  if (values.empty()) return 0.0;
+  const double n = static_cast<double>(values.size());
+  const double propagated = std::sqrt(variance) / n;
+  if (values.size() < 2) return propagated;
+  const SignalStatistics spread = meanAndStdDev(values);
+  return std::max(propagated, spread.std_dev / std::sqrt(n));
 }
 
 Estimate ratio(double measured, double measured_error, double simulated) {
@@ -28,18 +31,23 @@ Estimate ratio(double measured, double measured_error, double simulated) {
 }
 
 WeightDropSignature weightSignature(const CalibrationComparison& c, const ComparisonResult& all) {
+  const auto& runs = all.measured.calibration_runs;
   const ResponseSummary& mf = c.measured.force;
   const ResponseSummary& sf = c.simulated.force;
   const ResponseSummary& md = c.measured.deformation;
   const ResponseSummary& sd = c.simulated.deformation;
   WeightDropSignature s;
   s.key = c.key;
-  s.force_ratio = ratio(mf.steady.mean, steadyError(mf, all.measured.calibration_runs, c.key, true), sf.steady.mean);
-  s.deformation_ratio = ratio(md.steady.mean, steadyError(md, all.measured.calibration_runs, c.key, false), sd.steady.mean);
+  s.force_ratio = ratio(mf.steady.mean, caseError(runs, c.key, true, &StepResponseFit::steady, &StepResponseFit::steady_error), sf.steady.mean);
+  s.deformation_ratio =
+      ratio(md.steady.mean, caseError(runs, c.key, false, &StepResponseFit::steady, &StepResponseFit::steady_error), sd.steady.mean);
   s.force_per_weight_measured_N_per_kg = mf.steady.mean / c.key.mass_kg;
   s.force_per_weight_simulated_N_per_kg = sf.steady.mean / c.key.mass_kg;
-  s.frequency_ratio = ratio(mf.frequency_Hz.mean, standardError(mf.frequency_Hz), sf.frequency_Hz.mean);
-  s.damping_difference = {mf.damping_ratio.mean - sf.damping_ratio.mean, standardError(mf.damping_ratio)};
+  s.frequency_ratio = ratio(mf.frequency_Hz.mean,
+                            caseError(runs, c.key, true, &StepResponseFit::frequency_Hz, &StepResponseFit::frequency_error_Hz),
+                            sf.frequency_Hz.mean);
+  s.damping_difference = {mf.damping_ratio.mean - sf.damping_ratio.mean,
+                          caseError(runs, c.key, true, &StepResponseFit::damping_ratio, &StepResponseFit::damping_ratio_error)};
   return s;
 }
 

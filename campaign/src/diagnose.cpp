@@ -104,6 +104,7 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
   std::vector<analysis::Recording> runs;
   const CalibrationResult all = calibrate({e.study, origin, own, e.parameters}, model, settings.calibration);
   r.parameters = all.parameters;
+  r.minima = static_cast<int>(all.minima.size());
   r.extended_study = all.calibrated_study;
   r.residuals = all.residuals;
   r.runs = all.calibrated_runs;

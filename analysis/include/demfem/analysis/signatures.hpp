@@ -5,9 +5,9 @@
 // Calibration weights (Section 2.10.1, Fig. 8), per weight, measured over simulated:
 //   force_ratio = F_meas / F_sim and deformation_ratio = d_meas / d_sim of the steady values;
 //   force per weight F / m (N/kg) on both sides; frequency_ratio = f_meas / f_sim (force channel);
-//   damping_difference = zeta_meas - zeta_sim (force channel). Each with its standard error from
-//   the measured scatter (steady: spread between repeats, or the tail's spread over the square root
-//   of its samples for one repeat; frequency and damping: cycle spread over sqrt(cycles)).
+//   damping_difference = zeta_meas - zeta_sim (force channel), all from the whole-record fits
+//   (step_fit.hpp). Each with the standard error of the measured side: the larger of the fits'
+//   propagated errors and the spread between repeats over sqrt(repeats).
 //   Across the lightest and the heaviest weight: the change of both ratios, the change of the
 //   damping difference from the light weight (higher frequency) to the heavy one (lower frequency),
 //   and stiffness_consistency = frequency_ratio^2 x deformation_ratio averaged over the weights

@@ -66,6 +66,7 @@ struct CauseResult {
   SignatureMatch match;
   bool fitted = false;                       // false: not plausible, not fitted
   std::vector<FittedParameter> parameters;   // the fit on all cases
+  int minima = 0;                            // distinct minima within the noise (1 = unique fit)
   bool held_out = false;                     // false: ranked on all cases (see split)
   std::string split;                         // how the error after was obtained
   double error_before_percent = 0.0;         // held-out cases (or all cases), baseline
