@@ -58,7 +58,7 @@ std::vector<fem::SensorReadings> femAloneHistory(const fs::path& study_file, int
   const auto& tool = study.tools[0];
   const fem::ReducedModel model = fem::reduce(fem::buildFullModel(tool));
   fem::ThreeLevelIntegrator integrator(model, study.fem.dt_s, {tool.fem.alpha_s, tool.fem.beta_per_s});
-  const fem::Sensors sensors(model, tool.constraints.sensor_from_top_m);
+  const fem::Sensors sensors(model, tool);
   adapter::TestLoad load;
   load.force_N = kForceN;
   load.frequency_Hz = kFrequencyHz;

@@ -126,7 +126,7 @@ void compareWithCalculix(const study::Tool& tool, HexIntegration integration) {
   for (int k = 0; k < reduced.keypointCount(); ++k)
     if (std::abs(reduced.keypoints(k, 1)) < 1e-12) f(3 * k + 2) = -1.0 / static_cast<double>(tip.size());
   const StaticSolution s = solveStatic(reduced, f);
-  const SensorReadings reading = Sensors(reduced, tool.constraints.sensor_from_top_m).read(s.displacement, s.reaction);
+  const SensorReadings reading = Sensors(reduced, tool).read(s.displacement, s.reaction);
   INFO(tool.name << " load cell: demfem " << reading.load_cell_N << " N, CalculiX " << ccx.load_cell_reaction_z_N << " N");
   CHECK(reading.load_cell_N == Approx(ccx.load_cell_reaction_z_N).epsilon(0.005));  // issue 3: 0.5 %
 }
