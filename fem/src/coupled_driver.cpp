@@ -192,7 +192,7 @@ struct CoupledDriver::Impl {
   }
 
   void buildFem() {
-    model_ = std::make_unique<ReducedModel>(reduce(buildFullModel(tool_)));
+    model_ = std::make_unique<ReducedModel>(reduce(buildFullModel(tool_), options_.on_reduction_progress));
     integrator_ = std::make_unique<ThreeLevelIntegrator>(*model_, dt_, RayleighDamping{tool_.fem.alpha_s, tool_.fem.beta_per_s});
     sensors_ = std::make_unique<Sensors>(*model_, tool_.constraints.sensor_from_top_m);
   }

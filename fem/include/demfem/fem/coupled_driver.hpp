@@ -66,6 +66,7 @@ struct CoupledRunOptions {
   bool resume = false;
   double keypoint_tolerance_m = 1e-6;
   std::function<void(const CoupledProgress&)> on_progress;  // after every step
+  std::function<void(double)> on_reduction_progress;        // keypoint reduction, fraction done (reduce())
   std::function<bool()> stop_requested;                     // checked before every step
 };
 
