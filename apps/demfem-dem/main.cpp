@@ -4,6 +4,7 @@
 #include "demfem/adapter/test_backends.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/cli/progress.hpp"
 #include "demfem/protocol/transport.hpp"
 #include "demfem/study/study.hpp"
 #if DEMFEM_WITH_LIGGGHTS
@@ -40,7 +41,15 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::s
   if (std::find(tests.begin(), tests.end(), backend) != tests.end())
     return adapter::makeTestBackend(backend, study ? study->tools : std::vector<study::Tool>{study::Tool{}}, o.load);
   if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
-  if (backend == "builtin") return builtin::makeBackend(*study);
+  if (backend == "builtin") {
+    cli::Progress deposition("deposition", true);
+    auto api = builtin::makeBackend(*study, [&deposition](double fraction, const std::string& stage_line) {
+      if (!stage_line.empty()) std::cerr << "deposition: " << stage_line << std::endl;
+      deposition.update(fraction);
+    });
+    deposition.finish();
+    return api;
+  }
 #if DEMFEM_WITH_LIGGGHTS
   if (backend == "liggghts") return liggghts::makeBackend(*study);
 #else
@@ -87,11 +96,11 @@ void run(const Options& o) {
     { std::ofstream(tmp) << socket.endpoint() << '\n'; }
     std::filesystem::rename(tmp, o.endpoint_file);
   }
-  std::cout << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
+  std::cerr << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
             << (security ? " (CurveZMQ)" : "") << std::endl;
   adapter::Server server(*api);
   server.serve(socket, {millis(o.connect_timeout_s), millis(idle_s)});
-  std::cout << "demfem-dem: shut down by the client" << std::endl;
+  std::cerr << "demfem-dem: shut down by the client" << std::endl;
 }
 
 }  // namespace

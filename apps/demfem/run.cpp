@@ -116,6 +116,8 @@ fs::path siblingExecutable(const std::string& name) {
 
 void runLocal(const RunOptions& o, const std::string& json_target) {
   const study::Study study = study::loadStudy(o.study_file);  // validate before starting anything
+  if (study.kind == study::StudyKind::WeightDrop)
+    throw InputError(o.study_file + ": a weight-drop study has no DEM side; run it with: demfem-fem weight-drop " + o.study_file);
   const fs::path dem_exe = siblingExecutable("demfem-dem"), fem_exe = siblingExecutable("demfem-fem");
   const fs::path work = fs::temp_directory_path() / ("demfem-run-" + std::to_string(getpid()));
   fs::create_directories(work);

@@ -12,7 +12,7 @@ namespace demfem::cli {
 using namespace std::chrono_literals;
 
 Progress::Progress(std::string phase, bool enabled)
-    : Progress(std::move(phase), enabled, std::cerr, isatty(STDERR_FILENO) == 1, 2s, 1s) {}
+    : Progress(std::move(phase), enabled, std::cerr, isatty(STDERR_FILENO) == 1, 5s, 1s) {}
 
 Progress::Progress(std::string phase, bool enabled, std::ostream& out, bool terminal, Clock::duration interval,
                    Clock::duration delay)

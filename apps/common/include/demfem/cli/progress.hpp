@@ -1,8 +1,8 @@
 // Progress of a long phase of a demfem command, on standard error only (standard output carries
 // results). Every phase longer than a few seconds reports through one of these.
 //
-// Output: a line "PHASE: 42 % (DETAIL) ETA 12 s" at most every `interval` (default 2 s) while the
-// fraction grows, and "PHASE: done in 20.1 s (DETAIL)" from finish(). On a terminal the line is
+// Output: a line "PHASE: 42 % (DETAIL) ETA 12 s" at most every `interval` while the
+// fraction grows (default 5 s), and "PHASE: done in 20.1 s (DETAIL)" from finish(). On a terminal the line is
 // redrawn in place (at most every 0.2 s) instead. The time left is the elapsed time scaled by the
 // fraction still to do (a constant-rate estimate); nothing is printed for the first `delay`
 // (default 1 s) so phases that end quickly stay silent apart from finish() if they printed before.

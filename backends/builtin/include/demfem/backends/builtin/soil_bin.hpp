@@ -57,10 +57,22 @@ double studyTimeStep(const DemSimulation& sim, const study::DemSettings& dem);
 // Layer index (into soil.layers) of a particle centre at height y; the deepest layer below the fill.
 int layerAt(const study::Soil& soil, double y);
 
+// Mean particle volume (m^3) of the soil's size distribution (radii uniform between the diameter
+// bounds' halves).
+double meanParticleVolume(const study::Soil& soil);
+// Particles a deposition of `soil` settles to, estimated from the bin volume below the fill height,
+// the packing each stage is sized with and the mean particle volume (the quick bin: within 5 % of
+// the deposited count).
+std::size_t estimatedParticleCount(const study::Soil& soil);
+
+// Progress of depositSoil: the fraction done (each stage and the final settling counted by its
+// simulated-time cap, so an upper bound on what is left) and, at the end of each stage, its
+// summary line (empty otherwise).
+using DepositProgress = std::function<void(double fraction, const std::string& stage_line)>;
+
 // Deposits and settles the soil of `study` (deterministic for its seed and `threads`).
-// `progress` (may be empty) receives one line per stage.
-SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report,
-                        const std::function<void(const std::string&)>& progress);
+// `progress` may be empty.
+SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress);
 
 void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil);
 // Throws std::runtime_error naming the file on a missing, truncated or foreign file.
