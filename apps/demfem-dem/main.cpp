@@ -28,6 +28,7 @@ struct Options {
   std::string endpoint_file;
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
+  int threads = 0;            // 0: the study's dem.threads
   adapter::TestLoad load;
 };
 
@@ -69,6 +70,7 @@ void run(const Options& o) {
   }
   std::optional<study::Study> study;
   if (!o.study_file.empty()) study = study::loadStudy(o.study_file);
+  if (o.threads > 0 && study) study->dem.threads = o.threads;
   const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : "builtin";
 #if DEMFEM_WITH_LIGGGHTS
   if (backend == "liggghts" && !liggghts::isLeaderRank()) {
@@ -121,6 +123,8 @@ int main(int argc, char** argv) {
   app.add_option("--curve-keys", o.curve_keys, "CurveZMQ key directory (server.pub, server.secret, client.pub)")
       ->check(CLI::ExistingDirectory);
   app.add_option("--make-curve-keys", o.make_curve_keys, "Write a fresh server and client key pair to DIR and exit");
+  app.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--endpoint-file", o.endpoint_file, "Write the bound endpoint (with the chosen port) to FILE");
   app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")
       ->check(CLI::PositiveNumber);

@@ -40,6 +40,7 @@ struct RunOptions {
   std::string backend;
   std::int64_t steps = 0;
   std::int64_t checkpoint_every = 0;
+  int threads = 0;
   bool resume = false;
   bool quiet = false;
 };
@@ -134,6 +135,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   std::vector<std::string> dem_args{dem_exe.string(), "--study", o.study_file, "--bind", endpoint, "--endpoint-file",
                                     endpoint_file.string()};
   if (!o.backend.empty()) dem_args.insert(dem_args.end(), {"--backend", o.backend});
+  if (o.threads > 0) dem_args.insert(dem_args.end(), {"--threads", std::to_string(o.threads)});
   Child dem("demfem-dem", dem_args);
 
   // The DEM server binds after building its backend (deposition may take a while): wait for it.
@@ -192,6 +194,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
   cmd->add_option("--steps", o->steps, "Stop after this many FEM steps")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
+  cmd->add_option("--threads", o->threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");
   std::string& json = addJsonOption(*cmd);

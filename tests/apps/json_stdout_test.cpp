@@ -4,6 +4,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <thread>
+
 using namespace demfem::testing;
 
 namespace {
@@ -58,6 +61,19 @@ TEST_CASE("demfem validate, deposit and run print one JSON document with --json 
       jsonStdout({app("demfem"), "deposit", study.string(), "--soil-dir", (dir / "soil").string(), "--json", "-"}, dir / "deposit");
   CHECK(deposit["reused"] == false);
   CHECK(deposit["particles"].get<int>() > 100);
+
+  // validate's cost: insertion (18 mm depth + 10.5 mm clearance) / 300 mm/s = 95 FEM steps of 1 ms
+  // and a 10 mm drag at 36.14 mm/s = 277 steps; DEM steps over the same 0.372 s; the particle count
+  // bounds the deposited one from above (settled soils hold 0.66-0.89 of it: the full paper bin with
+  // the EDEM and the hooke laws, this bin); the machine's cores by default.
+  const auto& cost = validate["studies"][0]["cost"];
+  CHECK(cost["fem_steps"] == 95 + 277);
+  CHECK(cost["dem_steps"].get<double>() == Approx(0.372 / cost["dem_step_s"].get<double>()).margin(1.0));
+  const double deposited = deposit["particles"].get<double>();
+  CHECK(cost["particles_at_most"].get<double>() >= deposited);
+  CHECK(cost["particles_at_most"].get<double>() < deposited / 0.6);
+  CHECK(cost["threads"].get<unsigned>() == std::max(1u, std::thread::hardware_concurrency()));
+  CHECK(cost["wall_time_s"].get<double>() > 0.0);
 
   const auto run = jsonStdout({app("demfem"), "run", study.string(), "--backend", "harmonic", "--steps", "20", "--output",
                                (dir / "out").string(), "--json", "-"},

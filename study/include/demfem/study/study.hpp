@@ -197,7 +197,7 @@ struct DemSettings {
   TimeStepCriterion criterion = TimeStepCriterion::Rayleigh;
   double dt_fraction = 0.2;          // of the chosen criterion's critical step
   std::optional<double> dt_s;        // explicit step, overrides the criterion
-  int threads = 1;
+  int threads = 1;                // a study file without dem.threads gets the machine's cores (loadStudy)
   std::uint64_t seed = 1;             // draws during the run; deposition: soil.deposition_seed
   bool operator==(const DemSettings&) const = default;
 };
