@@ -209,7 +209,7 @@ struct CoupledDriver::Impl {
   }
 
   // Rigid motion of phase `drag` starting at step `from` (bin frame; identity rotation: tool x, y, z
-  // are bin x, y, z, DESIGN.md section 10).
+  // are bin x, y, z, docs/architecture.md section 10).
   adapter::RigidMotion motion(bool drag) const {
     const auto& m = tool_.motion;
     const double x = 0.5 * study_.soil.bin_width_m, top = study_.soil.fill_height_m;

@@ -640,7 +640,7 @@ class StudyParser {
     }
   }
 
-  // The LIGGGHTS backend offers only its own contact laws (DESIGN.md section 11).
+  // The LIGGGHTS backend offers only its own contact laws (docs/architecture.md section 11).
   void checkBackendModels() {
     if (study_.dem.backend != "liggghts") return;
     const ContactModel& c = study_.soil.contact;

@@ -126,7 +126,7 @@ TEST_CASE("the tools: Table 3 FEM data and Section 2.2 sizes", "[study]") {
   CHECK(p.fem.youngs_Pa == 4.06e9);
   CHECK(p.fem.poisson == 0.38);
   CHECK(p.fem.density_kg_m3 == 1220);
-  CHECK(p.fem.alpha_s == 0.00055);  // Table 3's 0.55 read as 0.55 ms (DESIGN.md section 4)
+  CHECK(p.fem.alpha_s == 0.00055);  // Table 3's 0.55 read as 0.55 ms (docs/architecture.md section 4)
   CHECK(p.fem.beta_per_s == 0);
   CHECK(pmma.material(p.dem_material).youngs_Pa == 7.9e10);  // Table 2, as printed
   const Study steel = load("s235_coupled_30.json");

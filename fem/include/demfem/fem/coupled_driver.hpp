@@ -1,4 +1,4 @@
-// The coupled DEM-FEM cycle of paper Fig. 3 (DESIGN.md sections 1-4), driven from the FEM side
+// The coupled DEM-FEM cycle of paper Fig. 3 (docs/architecture.md sections 1-4), driven from the FEM side
 // through the abstract coupling API, exactly as the paper's client drives EDEM:
 //   nodeForces -> FEM step (Eq 9, reactions Eq 10) -> setNodePositions -> simulate(dt_FEM), repeated.
 //

@@ -1,5 +1,5 @@
 // demfem FEM model of a tool: consistent M and K, constraints, and the keypoint-reduced model of
-// paper Section 2.6, Eq (11)-(15) (DESIGN.md section 4).
+// paper Section 2.6, Eq (11)-(15) (docs/architecture.md section 4).
 //
 // Contract
 // - Units: SI (m, kg, N, Pa). Frame: tool local frame (x width, y length with tip y = 0 and top

@@ -1,4 +1,4 @@
-// demfem calibration-weight simulation (paper Section 2.10.1, Fig. 5, 7, 8; DESIGN.md section 4).
+// demfem calibration-weight simulation (paper Section 2.10.1, Fig. 5, 7, 8; docs/architecture.md section 4).
 //
 // The tool is clamped horizontally exactly as in the soil bin (Section 2.9 constraints) with gravity
 // along its -z axis (the same direction as the soil load, so force and deformation read positive).

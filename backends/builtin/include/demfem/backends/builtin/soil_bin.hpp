@@ -1,9 +1,9 @@
 // The soil bin of a study for the built-in DEM: the box, the gravity deposition of the particle
 // assembly in layers (paper Section 2.9, Fig. 4a-b) and the settled-soil file reused by every study
-// on the same soil (DESIGN.md section 5).
+// on the same soil (docs/architecture.md section 5).
 //
 // Contract
-// - Bin frame (DESIGN.md section 10, study.hpp), metres: origin at a bottom corner, x in [0, W],
+// - Bin frame (docs/architecture.md section 10, study.hpp), metres: origin at a bottom corner, x in [0, W],
 //   y up from the floor y = 0, z in [0, L]. Walls are planes (floor and four sides, open top) of the study's bin material.
 // - Deposition: particles (diameters uniform in [d_min, d_max], seed soil.deposition_seed) are
 //   rained in four stages from the bottom up, one per layer thickness of the study (the paper
