@@ -26,6 +26,7 @@ struct Options {
   std::string curve_keys;
   std::string make_curve_keys;
   std::string endpoint_file;
+  std::string output_dir;
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
   int threads = 0;            // 0: the study's dem.threads
@@ -71,6 +72,7 @@ void run(const Options& o) {
   std::optional<study::Study> study;
   if (!o.study_file.empty()) study = study::loadStudy(o.study_file);
   if (o.threads > 0 && study) study->dem.threads = o.threads;
+  if (study && !o.output_dir.empty()) study->output.directory = o.output_dir;
   const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : "builtin";
 #if DEMFEM_WITH_LIGGGHTS
   if (backend == "liggghts" && !liggghts::isLeaderRank()) {
@@ -126,6 +128,7 @@ int main(int argc, char** argv) {
   app.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
       ->check(CLI::PositiveNumber);
   app.add_option("--endpoint-file", o.endpoint_file, "Write the bound endpoint (with the chosen port) to FILE");
+  app.add_option("--output", o.output_dir, "Directory of the DEM's own files (builtin: VTK); default: the study's output.directory");
   app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")
       ->check(CLI::PositiveNumber);
   app.add_option("--idle-timeout-s", o.idle_timeout_s,

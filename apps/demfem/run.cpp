@@ -136,6 +136,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
                                     endpoint_file.string()};
   if (!o.backend.empty()) dem_args.insert(dem_args.end(), {"--backend", o.backend});
   if (o.threads > 0) dem_args.insert(dem_args.end(), {"--threads", std::to_string(o.threads)});
+  if (!o.output_dir.empty()) dem_args.insert(dem_args.end(), {"--output", o.output_dir});
   Child dem("demfem-dem", dem_args);
 
   // The DEM server binds after building its backend (deposition may take a while): wait for it.
@@ -192,7 +193,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("study", o->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
-  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps")->check(CLI::PositiveNumber);
+  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (outputs then marked incomplete)")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
   cmd->add_option("--threads", o->threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
       ->check(CLI::PositiveNumber);
