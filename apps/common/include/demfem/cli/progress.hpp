@@ -4,8 +4,9 @@
 // Output: a line "PHASE: 42 % (DETAIL) ETA 12 s" at most every `interval` while the
 // fraction grows (default 5 s), and "PHASE: done in 20.1 s (DETAIL)" from finish(). On a terminal the line is
 // redrawn in place (at most every 0.2 s) instead. The time left is the elapsed time scaled by the
-// fraction still to do (a constant-rate estimate); nothing is printed for the first `delay`
-// (default 1 s) so phases that end quickly stay silent apart from finish() if they printed before.
+// fraction still to do (a constant-rate estimate). Nothing is printed during the first `delay`
+// (default 1 s), and finish() prints only when the phase took longer than that or printed before,
+// so phases that end quickly stay silent. A fraction of 1 prints nothing: the end is finish()'s.
 #pragma once
 
 #include <chrono>
