@@ -4,6 +4,7 @@
 #include "demfem/adapter/test_backends.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/cli/soil_supply.hpp"
 #include "demfem/protocol/transport.hpp"
 #include "demfem/study/study.hpp"
 #if DEMFEM_WITH_LIGGGHTS
@@ -27,6 +28,7 @@ struct Options {
   std::string endpoint_file;
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
+  bool allow_unsettled_soil = false;
   adapter::TestLoad load;
 };
 
@@ -34,21 +36,44 @@ std::chrono::milliseconds millis(double seconds) {
   return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
 }
 
+// A soil deposited by the other backend than the one serving is deposited here (this process,
+// before the backend is built) when its file is missing; the serving backend deposits its own.
+void provideSoil(const study::Study& study, const std::string& backend) {
+  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+  const std::string& deposition = study::depositionBackendName(study.soil.deposition_backend);
+  if (std::filesystem::exists(file) || deposition == backend) return;
+  std::cerr << "demfem-dem: depositing the soil with " << deposition << " into " << file.string() << std::endl;
+  cli::DepositCost cost;
+  adapter::writeSettledSoil(file, cli::depositWith(study.soil.deposition_backend, study, study.dem.threads, cost,
+                                                   [](const std::string& line) { std::cerr << line << std::endl; }));
+}
+
+std::unique_ptr<adapter::CouplingApi> makeSoilBackend(const std::string& backend, const study::Study& study) {
+  if (backend == "builtin") return builtin::makeBackend(study);
+#if DEMFEM_WITH_LIGGGHTS
+  if (backend == "liggghts") return liggghts::makeBackend(study);
+#else
+  if (backend == "liggghts")
+    throw cli::InputError("this demfem-dem was built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF)");
+#endif
+  throw std::logic_error("makeSoilBackend: not a soil backend: " + backend);
+}
+
 std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::string& backend,
                                                    const std::optional<study::Study>& study) {
   const auto& tests = adapter::testBackendNames();
   if (std::find(tests.begin(), tests.end(), backend) != tests.end())
     return adapter::makeTestBackend(backend, study ? study->tools : std::vector<study::Tool>{study::Tool{}}, o.load);
+  if (backend != "builtin" && backend != "liggghts")
+    throw cli::InputError("unknown backend '" + backend + "' (builtin, liggghts, constant, harmonic, spring)");
   if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
-  if (backend == "builtin") return builtin::makeBackend(*study);
-#if DEMFEM_WITH_LIGGGHTS
-  if (backend == "liggghts") return liggghts::makeBackend(*study);
-#else
-  if (backend == "liggghts")
-    throw cli::InputError("this demfem-dem was built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF)");
-#endif
-  throw cli::InputError("unknown backend '" + backend + "' (builtin, liggghts, constant, harmonic, spring)");
+  provideSoil(*study, backend);
+  auto api = makeSoilBackend(backend, *study);
+  const auto file = adapter::settledSoilFile(*study, adapter::defaultSoilDirectory());
+  cli::requireSettled(adapter::readSettledSoil(file, *study), file, o.allow_unsettled_soil);
+  return api;
 }
+
 
 void run(const Options& o) {
   if (!o.make_curve_keys.empty()) {
@@ -118,6 +143,9 @@ int main(int argc, char** argv) {
   app.add_option("--idle-timeout-s", o.idle_timeout_s,
                  "Give up if the client sends nothing for this long (s); default: twice the study's coupling timeout")
       ->check(CLI::PositiveNumber);
+  app.add_flag("--allow-unsettled-soil", o.allow_unsettled_soil,
+               "Serve even if the settled soil is not settled (a deposition stage hit its time cap or the kinetic "
+               "energy is above the study's threshold); refused by default");
   app.add_option("--test-force-N", o.load.force_N, "Test backends: total tip-row force F along local z (N)");
   app.add_option("--test-frequency-Hz", o.load.frequency_Hz, "Harmonic test backend: frequency f (Hz)");
   app.add_option("--test-stiffness-N-m", o.load.stiffness_N_m, "Spring test backend: total tip-row stiffness k (N/m)");
