@@ -26,6 +26,7 @@ struct Options {
   std::string curve_keys;
   std::string make_curve_keys;
   std::string endpoint_file;
+  std::string output_dir;
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
   bool allow_unsettled_soil = false;
@@ -85,6 +86,7 @@ void run(const Options& o) {
   }
   std::optional<study::Study> study;
   if (!o.study_file.empty()) study = study::loadStudy(o.study_file);
+  if (study && !o.output_dir.empty()) study->output.directory = o.output_dir;
   const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : "builtin";
 #if DEMFEM_WITH_LIGGGHTS
   if (backend == "liggghts" && !liggghts::isLeaderRank()) {
@@ -138,6 +140,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingDirectory);
   app.add_option("--make-curve-keys", o.make_curve_keys, "Write a fresh server and client key pair to DIR and exit");
   app.add_option("--endpoint-file", o.endpoint_file, "Write the bound endpoint (with the chosen port) to FILE");
+  app.add_option("--output", o.output_dir, "Directory of the DEM's own files (builtin: VTK); default: the study's output.directory");
   app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")
       ->check(CLI::PositiveNumber);
   app.add_option("--idle-timeout-s", o.idle_timeout_s,

@@ -142,6 +142,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
                                     endpoint_file.string()};
   if (!o.backend.empty()) dem_args.insert(dem_args.end(), {"--backend", o.backend});
   if (o.allow_unsettled_soil) dem_args.push_back("--allow-unsettled-soil");
+  if (!o.output_dir.empty()) dem_args.insert(dem_args.end(), {"--output", o.output_dir});
   Child dem("demfem-dem", dem_args);
 
   // The DEM server binds after building its backend (deposition may take a while): wait for it.
@@ -198,7 +199,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("study", o->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
-  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps")->check(CLI::PositiveNumber);
+  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (outputs then marked incomplete)")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");

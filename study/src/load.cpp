@@ -310,9 +310,10 @@ class StudyParser {
 
     const bool deformable = kind == StudyKind::Coupled || kind == StudyKind::WeightDrop || kind == StudyKind::FemOnly;
     tool.fem.deformable = deformable;
-    if (deformable) {
+    if (deformable || kind == StudyKind::DemOnly) {
+      // A DEM-only tool is rigid, but its load cell reads the static split of its FEM model.
       ObjectReader f = t.object("fem", Need::Required);
-      readToolFem(f, tool.fem, geometry == GeometryKind::MatrixMarket);
+      readToolFem(f, tool.fem, geometry == GeometryKind::MatrixMarket, deformable);
     } else {
       t.forbid("fem", std::string("the tool of a ") + kindName(kind) + " study is rigid");
     }
@@ -444,7 +445,7 @@ class StudyParser {
     return file;
   }
 
-  void readToolFem(ObjectReader& f, ToolFem& fem, bool matrices_given) {
+  void readToolFem(ObjectReader& f, ToolFem& fem, bool matrices_given, bool dynamic) {
     if (matrices_given) {
       const std::string why = "the mass and stiffness matrices of a \"matrix-market\" geometry already contain it";
       for (const char* key : {"E_Pa", "nu", "density_kg_m3", "element_order"}) f.forbid(key, why);
@@ -454,8 +455,13 @@ class StudyParser {
       if (auto v = f.quantity("density_kg_m3", positive(), Need::Required)) fem.density_kg_m3 = *v;
       if (auto v = f.choice("element_order", detail::kElementOrders, Need::Optional)) fem.element_order = *v;
     }
-    if (auto v = f.quantity("alpha_s", nonNegative(), Need::Required)) fem.alpha_s = *v;  // Eq (4)
-    if (auto v = f.quantity("beta_per_s", nonNegative(), Need::Required)) fem.beta_per_s = *v;
+    if (!dynamic) {
+      const std::string why = "a rigid tool is not integrated in time (its FEM model gives the load cell's static split)";
+      for (const char* key : {"alpha_s", "beta_per_s"}) f.forbid(key, why);
+    } else {
+      if (auto v = f.quantity("alpha_s", nonNegative(), Need::Required)) fem.alpha_s = *v;  // Eq (4)
+      if (auto v = f.quantity("beta_per_s", nonNegative(), Need::Required)) fem.beta_per_s = *v;
+    }
     f.finish();
   }
 

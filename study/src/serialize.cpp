@@ -121,7 +121,7 @@ ordered_json toolJson(const Tool& tool, StudyKind kind) {
       put(geometry, "keypoint_spacing_mm", g.keypoint_spacing_m);
       break;
   }
-  if (tool.fem.deformable) {
+  if (tool.fem.deformable || kind == StudyKind::DemOnly) {
     ordered_json& fem = out["fem"];
     if (g.kind != GeometryKind::MatrixMarket) {
       put(fem, "E_Pa", tool.fem.youngs_Pa);
@@ -129,8 +129,10 @@ ordered_json toolJson(const Tool& tool, StudyKind kind) {
       put(fem, "density_kg_m3", tool.fem.density_kg_m3);
       fem["element_order"] = nameOf(detail::kElementOrders, tool.fem.element_order);
     }
-    put(fem, "alpha_s", tool.fem.alpha_s);
-    put(fem, "beta_per_s", tool.fem.beta_per_s);
+    if (tool.fem.deformable) {
+      put(fem, "alpha_s", tool.fem.alpha_s);
+      put(fem, "beta_per_s", tool.fem.beta_per_s);
+    }
   }
   if (g.kind != GeometryKind::Cone) {
     ordered_json& c = out["constraints"];

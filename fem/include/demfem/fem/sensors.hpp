@@ -45,6 +45,13 @@ class Sensors {
   std::vector<std::pair<int, double>> tip_slope_weights_; // (z DOF, weight): slope of -u_z, 1/m
 };
 
+// The load cell's static influence coefficients (paper Section 2.9): c with load_cell_N = c . f
+// (Sensors::read of solveStatic(model, f)) for any keypoint forces f (3n, N, model DOF order). By
+// K u = f + r: r_c = K_cf K_ff^-1 f_f - f_c at the fixed DOFs, so one static solve gives them all:
+// c_f = K_ff^-1 K_fc s (s the indicator of the load-cell z DOFs) and c_c = -s. Used for a rigid
+// tool, whose load cell reads the same split of the soil forces as the deformable one at rest.
+Eigen::VectorXd loadCellInfluence(const ReducedModel& model);
+
 // Matches keypoint positions received from a DEM backend (n x 3, row-major, tool local frame, m) to
 // the model's keypoints: result[i] is the model keypoint id of received node i. Positions match if
 // they are within `tolerance_m`. Throws std::invalid_argument if the counts differ, a received node
