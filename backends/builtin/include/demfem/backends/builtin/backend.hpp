@@ -10,7 +10,12 @@
 namespace demfem::builtin {
 
 // Builds the DEM simulation of `study` (soil, bin, tools at their start positions) ready for the
-// coupling cycle. Throws adapter::CouplingError on a study this backend cannot run.
+// coupling cycle. The soil is the study's settled-soil file adapter::settledSoilFile(study,
+// adapter::defaultSoilDirectory()) (adapter/settled_soil.hpp), whichever backend deposited it; a
+// missing file is deposited here (depositSoil(), study.dem.threads) and written when the study
+// deposits with the built-in DEM, and is BadRequest naming the file otherwise. info().soil_json
+// records the soil (adapter::soilRecordJson). Throws adapter::CouplingError on a study this backend
+// cannot run or a damaged or foreign soil file (BadRequest naming it).
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study);
 
 // The DEM mesh of a tool: the plate's keypoint triangulation shared with the FEM

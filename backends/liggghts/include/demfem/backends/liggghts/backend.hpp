@@ -53,8 +53,8 @@ struct BackendOptions {
   std::vector<ProbeSphere> probes;
   // Where settled soils are kept; empty: $DEMFEM_SOIL_DIR if set, else "soil" in the working directory.
   std::filesystem::path soil_directory;
-  // Non-empty: the settled soil to start from (particles at rest) instead of the cached or deposited
-  // one, e.g. another backend's, to compare the two on the same particles. No soil file is used.
+  // Non-empty: the settled soil to start from (particles at rest) instead of the study's settled-soil
+  // file; no soil file is read or written and info().soil_json stays empty.
   std::vector<Sphere> settled_soil;
 };
 
