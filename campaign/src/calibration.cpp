@@ -41,7 +41,7 @@ class Evaluator {
       : study_(study), origin_(std::move(origin)), specs_(std::move(specs)), model_(model), options_(options),
         cases_(casesOf(recordings)) {
     for (const auto& key : cases_) caseStudy(study_, origin_, key);  // every case runnable (ArgumentError otherwise)
-    targets_ = targets(analysis::evaluate(recordings, options.objective.analysis), options.objective);
+    measured_ = quantities(recordings, options.objective, false);
     if (!options.cache_dir.empty()) cache_.emplace(options.cache_dir);
     scratch_ = options.cache_dir.empty() ? fs::temp_directory_path() / ("demfem-calibrate-" + std::to_string(getpid()))
                                          : options.cache_dir / "scratch";
@@ -62,7 +62,7 @@ class Evaluator {
     if (options_.stop_requested && options_.stop_requested()) throw Interrupted("calibration interrupted (finished runs are kept in the run cache)");
     Evaluation e;
     e.runs = runAll(withValues(study_, specs_, values));
-    e.residuals = residuals(targets_, evaluateEach(e.runs, options_.objective));
+    e.residuals = residuals(measured_, quantities(e.runs, options_.objective, true));
     e.chi2 = chi2(e.residuals);
     ++evaluations_;
     std::lock_guard lock(mutex_);
@@ -121,7 +121,7 @@ class Evaluator {
   Model& model_;
   const CalibrationOptions& options_;
   std::vector<analysis::CaseKey> cases_;
-  std::vector<Target> targets_;
+  std::vector<Quantity> measured_;
   std::optional<RunCache> cache_;
   fs::path scratch_;
   std::mutex mutex_;
@@ -310,8 +310,10 @@ CalibrationResult calibrate(const CalibrationProblem& problem, Model& model, con
     p.spec = specs[i];
     p.initial = initial[i];
     p.best = best_values[i];
-    p.identified = std::isfinite(sigma[i]) && sigma[i] <= options.unidentified_fraction;
-    p.std_dev = p.identified ? toFileSigma(specs[i], best_values[i], sigma[i]) : std::numeric_limits<double>::infinity();
+    const double sd = toFileSigma(specs[i], best_values[i], sigma[i]);
+    p.identified = std::isfinite(sigma[i]) && sigma[i] <= options.unidentified_fraction &&
+                   sd <= options.unidentified_relative * std::abs(best_values[i]);
+    p.std_dev = std::isfinite(sd) ? sd : std::numeric_limits<double>::infinity();
     if (p.identified) p.value = best_values[i];
     result.parameters.push_back(p);
   }

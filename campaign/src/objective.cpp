@@ -1,111 +1,110 @@
 #include "demfem/campaign/objective.hpp"
 
+#include "demfem/analysis/step_fit.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace demfem::campaign {
 namespace {
 
-double withFloor(double sigma, double measured, const ObjectiveSettings& s) {
-  return std::max(sigma, s.relative_floor * std::abs(measured));
-}
+// One repeat's value of a quantity and its own uncertainty.
+struct Estimate {
+  double value = 0;
+  double error = 0;  // weight fits: standard error; windows: the sample-based error of this repeat
+};
 
-double standardError(const analysis::SignalStatistics& s) {
-  return s.samples > 0 ? s.std_dev / std::sqrt(static_cast<double>(s.samples)) : 0.0;
-}
+using CaseEstimates = std::map<std::string, std::vector<Estimate>>;
 
-// Samples in the steady tail of a run of `size` samples (step_response.hpp).
-std::size_t tailSamples(std::size_t size, const analysis::StepResponseSettings& s) {
-  const auto fraction = static_cast<std::size_t>(s.steady_fraction * static_cast<double>(size));
-  return std::min(size, std::max(s.min_tail_samples, fraction));
-}
-
-void addCalibrationTargets(const analysis::CalibrationCase& c, const analysis::EvaluationResult& measured, const ObjectiveSettings& s,
-                           std::vector<Target>& out) {
-  double force_error = 0, deformation_error = 0;  // largest standard error of a repeat's steady value
-  for (const auto& run : measured.calibration_runs) {
-    if (run.key != c.key) continue;
-    const double root_n = std::sqrt(static_cast<double>(tailSamples(run.time_s.size(), s.analysis.step_response)));
-    force_error = std::max(force_error, run.force.steady_std / root_n);
-    deformation_error = std::max(deformation_error, run.deformation.steady_std / root_n);
+// Mean over repeats and the scatter of that mean (header comment).
+Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::vector<Estimate>& repeats, double floor) {
+  const auto R = static_cast<double>(repeats.size());
+  double mean = 0, own = 0;
+  for (const auto& e : repeats) mean += e.value / R, own += e.error * e.error / R;
+  double between = 0;
+  if (repeats.size() > 1) {
+    for (const auto& e : repeats) between += (e.value - mean) * (e.value - mean) / (R - 1);
   }
-  const auto steady = [&](const char* name, const analysis::SignalStatistics& st, double run_error) {
-    const double between = st.samples > 1 ? st.std_dev : 0.0;
-    out.push_back({c.key, name, st.mean, withFloor(std::max(between, run_error), st.mean, s)});
+  const double sigma = std::sqrt(std::max(between, own) / R);
+  return {key, name, mean, std::max(sigma, floor * std::abs(mean))};
+}
+
+void addWeightRun(const analysis::Recording& rec, CaseEstimates& out) {
+  const WeightSignals s = weightSignals(rec);
+  const std::string file = rec.csv_path.string();
+  const auto f = analysis::fitStepResponse(s.time_s, s.force_N, file + ": force");
+  const auto d = analysis::fitStepResponse(s.time_s, s.deformation_mm, file + ": deformation");
+  out["step_force_N"].push_back({f.steady - f.initial, f.steady_error});
+  out["step_deformation_mm"].push_back({d.steady - d.initial, d.steady_error});
+  out["frequency_Hz"].push_back({d.frequency_Hz, d.frequency_error_Hz});
+  out["damping_ratio"].push_back({d.damping_ratio, d.damping_ratio_error});
+}
+
+void addSoilRun(const analysis::Recording& rec, const ObjectiveSettings& s, CaseEstimates& out) {
+  const analysis::EvaluatedRun run = analysis::evaluateSoilBinRun(rec, s.analysis.evaluation);
+  const auto add = [&](const std::string& name, const analysis::SignalStatistics& w) {
+    const double n = static_cast<double>(std::max<std::size_t>(w.samples, 2));
+    out["window_mean_" + name].push_back({w.mean, w.std_dev / std::sqrt(n)});
+    out["window_std_" + name].push_back({w.std_dev, w.std_dev / std::sqrt(2 * (n - 1))});
   };
-  steady("steady_force_N", c.force.steady, force_error);
-  steady("steady_deformation_mm", c.deformation.steady, deformation_error);
-  out.push_back({c.key, "frequency_Hz", c.deformation.frequency_Hz.mean,
-                 withFloor(standardError(c.deformation.frequency_Hz), c.deformation.frequency_Hz.mean, s)});
-  out.push_back({c.key, "damping_ratio", c.deformation.damping_ratio.mean,
-                 withFloor(standardError(c.deformation.damping_ratio), c.deformation.damping_ratio.mean, s)});
+  add("force_N", run.window.force_N);
+  if (s.soil_deformation) add("deformation_mm", run.window.deformation_mm);
 }
 
-void addSoilTargets(const analysis::PooledCase& c, const analysis::EvaluationResult& measured, const ObjectiveSettings& s,
-                    std::vector<Target>& out) {
-  std::size_t samples = 0;
-  for (const auto& run : measured.soil_bin_runs)
-    if (run.key == c.key) samples += run.window.force_N.samples;
-  const double root_n = std::sqrt(static_cast<double>(std::max<std::size_t>(samples, 1)));
-  const double spread_factor = 1 / std::sqrt(2.0 * static_cast<double>(std::max<std::size_t>(samples, 2) - 1));
-  const auto signal = [&](const std::string& name, double mean, const std::optional<double>& between, double spread) {
-    out.push_back({c.key, "window_mean_" + name, mean, withFloor(std::max(between.value_or(0.0), spread / root_n), mean, s)});
-    out.push_back({c.key, "window_std_" + name, spread, withFloor(spread * spread_factor, spread, s)});
-  };
-  signal("force_N", c.force_mean_N, c.force_between_repeats_std_N, c.force_std_N);
-  if (s.soil_deformation) signal("deformation_mm", c.deformation_mean_mm, c.deformation_between_repeats_std_mm, c.deformation_std_mm);
-}
-
-// The simulated value of `quantity` for the case, if it could be evaluated.
-std::optional<double> simulatedValue(const analysis::EvaluationResult& sim, const Target& t) {
-  for (const auto& c : sim.calibration_cases) {
-    if (c.key != t.key) continue;
-    if (t.quantity == "steady_force_N") return c.force.steady.mean;
-    if (t.quantity == "steady_deformation_mm") return c.deformation.steady.mean;
-    if (t.quantity == "frequency_Hz") return c.deformation.frequency_Hz.mean;
-    if (t.quantity == "damping_ratio") return c.deformation.damping_ratio.mean;
-  }
-  for (const auto& c : sim.soil_bin_cases) {
-    if (c.key != t.key) continue;
-    if (t.quantity == "window_mean_force_N") return c.force_mean_N;
-    if (t.quantity == "window_std_force_N") return c.force_std_N;
-    if (t.quantity == "window_mean_deformation_mm") return c.deformation_mean_mm;
-    if (t.quantity == "window_std_deformation_mm") return c.deformation_std_mm;
-  }
-  return std::nullopt;
+// The order quantities are listed in (stable across measured and simulated sides).
+const std::vector<std::string>& quantityOrder() {
+  static const std::vector<std::string> order = {"step_force_N",         "step_deformation_mm",        "frequency_Hz",
+                                                 "damping_ratio",        "window_mean_force_N",        "window_std_force_N",
+                                                 "window_mean_deformation_mm", "window_std_deformation_mm"};
+  return order;
 }
 
 }  // namespace
 
-std::vector<Target> targets(const analysis::EvaluationResult& measured, const ObjectiveSettings& settings) {
-  std::vector<Target> out;
-  for (const auto& c : measured.calibration_cases) addCalibrationTargets(c, measured, settings, out);
-  for (const auto& c : measured.soil_bin_cases) addSoilTargets(c, measured, settings, out);
+WeightSignals weightSignals(const analysis::Recording& rec) {
+  const bool raw = rec.format == analysis::RecordingFormat::Raw;
+  WeightSignals s;
+  s.time_s = rec.time_s;
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    s.force_N.push_back(rec.force[i] * (raw ? rec.force_factor_N_per_unit : 1.0));
+    s.deformation_mm.push_back(rec.deformation[i] * (raw ? rec.deformation_factor_mm_per_unit : 1.0));
+  }
+  return s;
+}
+
+std::vector<Quantity> quantities(const std::vector<analysis::Recording>& recordings, const ObjectiveSettings& settings, bool tolerate_failures) {
+  std::map<analysis::CaseKey, CaseEstimates> cases;
+  for (const auto& rec : recordings) {
+    CaseEstimates one;
+    try {
+      switch (rec.key.kind) {
+        case analysis::CaseKind::CalibrationWeight:
+          addWeightRun(rec, one);
+          break;
+        case analysis::CaseKind::SoilBin:
+          addSoilRun(rec, settings, one);
+          break;
+      }
+    } catch (const analysis::InputError&) {
+      if (!tolerate_failures) throw;
+      continue;
+    }
+    for (auto& [name, estimates] : one) cases[rec.key][name].push_back(estimates.front());
+  }
+  std::vector<Quantity> out;
+  for (const auto& [key, estimates] : cases)
+    for (const auto& name : quantityOrder())
+      if (auto it = estimates.find(name); it != estimates.end()) out.push_back(pool(key, name, it->second, settings.relative_floor));
   return out;
 }
 
-analysis::EvaluationResult evaluateEach(const std::vector<analysis::Recording>& runs, const ObjectiveSettings& settings) {
-  analysis::EvaluationResult all;
-  for (const auto& run : runs) {
-    analysis::EvaluationResult one;
-    try {
-      one = analysis::evaluate({run}, settings.analysis);
-    } catch (const analysis::InputError&) {
-      continue;  // scored by residuals() as a missing value
-    }
-    for (auto& r : one.soil_bin_runs) all.soil_bin_runs.push_back(std::move(r));
-    for (auto& c : one.soil_bin_cases) all.soil_bin_cases.push_back(std::move(c));
-    for (auto& r : one.calibration_runs) all.calibration_runs.push_back(std::move(r));
-    for (auto& c : one.calibration_cases) all.calibration_cases.push_back(std::move(c));
-  }
-  return all;
-}
-
-std::vector<Residual> residuals(const std::vector<Target>& targets, const analysis::EvaluationResult& simulated) {
+std::vector<Residual> residuals(const std::vector<Quantity>& measured, const std::vector<Quantity>& simulated) {
   std::vector<Residual> out;
-  for (const Target& t : targets) {
-    const double sim = simulatedValue(simulated, t).value_or(0.0);
-    out.push_back({t.key, t.quantity, t.measured, sim, t.sigma, (sim - t.measured) / t.sigma});
+  for (const Quantity& m : measured) {
+    const auto it = std::find_if(simulated.begin(), simulated.end(), [&](const Quantity& s) { return s.key == m.key && s.name == m.name; });
+    const double sim = it == simulated.end() ? 0.0 : it->value;
+    out.push_back({m.key, m.name, m.value, sim, m.sigma, (sim - m.value) / m.sigma});
   }
   return out;
 }

@@ -1,5 +1,7 @@
 #include "demfem/campaign/calibration.hpp"
 
+#include "demfem/analysis/step_fit.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -57,14 +59,15 @@ std::string number(double v) {
 }
 
 std::string objectiveText(const CalibrationOptions& o) {
-  return "chi2 = sum over cases and quantities of ((simulated - measured) / sigma)^2. Calibration-weight cases: steady force_N, "
-         "steady deformation_mm, frequency_Hz and damping ratio of the deformation; soil-bin cases: window mean and standard "
-         "deviation of force_N" +
+  return "chi2 = sum over cases and quantities of ((simulated - measured) / sigma)^2. Calibration-weight cases: step height of "
+         "force_N and deformation_mm, frequency_Hz and damping ratio of the deformation, from the damped step response fitted to "
+         "the whole record; soil-bin cases: mean and standard deviation of force_N" +
          std::string(o.objective.soil_deformation ? " and deformation_mm" : "") +
-         ". sigma = the measured scatter (between repeats, or the standard error of the samples), at least " +
+         " over the Section 2.3 window. Measured value = mean over repeats; sigma = its scatter (between repeats, or the fits' "
+         "standard errors / the window samples' standard error, whichever is larger, over sqrt(repeats)), at least " +
          number(100 * o.objective.relative_floor) + " % of the measured value. Uncertainty: local curvature (Gauss-Newton, "
-         "Delta chi2 = 1); a parameter whose one-sigma interval exceeds " + number(100 * o.unidentified_fraction) +
-         " % of its bounds is unidentified. Distinct minima: starts ending within Delta chi2 = " + number(o.noise_chi2) +
+         "Delta chi2 = 1); a parameter whose standard deviation exceeds " + number(100 * o.unidentified_fraction) +
+         " % of its bounds or " + number(100 * o.unidentified_relative) + " % of its value is unidentified. Distinct minima: starts ending within Delta chi2 = " + number(o.noise_chi2) +
          " of the best and more than 3 sigma away from it.\n";
 }
 
@@ -80,7 +83,7 @@ std::string stageReport(const Stage& stage, const CalibrationResult& r, const st
   std::string s = "## " + stage.title + "\n\n| parameter | initial | fitted | std dev | bounds |\n|---|---|---|---|---|\n";
   for (const auto& p : r.parameters)
     s += "| `" + p.spec.pointer + "` | " + number(p.initial) + " | " + (p.value ? number(*p.value) : std::string("unidentified")) + " | " +
-         (p.identified ? number(p.std_dev) : std::string("-")) + " | " + number(p.spec.lo) + " - " + number(p.spec.hi) +
+         number(p.std_dev) + " | " + number(p.spec.lo) + " - " + number(p.spec.hi) +
          (p.spec.log ? " (log)" : "") + " |\n";
   for (const auto& p : r.parameters)
     if (!p.identified)
@@ -124,18 +127,17 @@ struct Curve {
   std::vector<double> x, force, deformation;
 };
 
-// Calibrated signals of a recording against time (weights: shifted so the first overshoot is at
-// `peak_s`) or tool displacement (soil bin).
-Curve curveOf(const analysis::Recording& rec, const analysis::AnalysisSettings& settings, double peak_s) {
-  const analysis::EvaluationResult e = analysis::evaluate({rec}, settings);
+// Calibrated signals of a recording against time (weights: shifted so the fitted moment the weight
+// was hung is at `step_s`) or tool displacement (soil bin).
+Curve curveOf(const analysis::Recording& rec, const analysis::AnalysisSettings& settings, double step_s) {
   Curve c;
-  if (!e.calibration_runs.empty()) {
-    const auto& run = e.calibration_runs.front();
-    const double shift = peak_s - run.deformation.first_peak_time_s;
-    for (double t : run.time_s) c.x.push_back(t + shift);
-    c.force = run.force_N, c.deformation = run.deformation_mm;
+  if (rec.key.kind == analysis::CaseKind::CalibrationWeight) {
+    const WeightSignals s = weightSignals(rec);
+    const double shift = step_s - analysis::fitStepResponse(s.time_s, s.deformation_mm, rec.csv_path.string()).step_time_s;
+    for (double t : s.time_s) c.x.push_back(t + shift);
+    c.force = s.force_N, c.deformation = s.deformation_mm;
   } else {
-    const auto& curve = e.soil_bin_runs.front().curve;
+    const auto curve = analysis::evaluateSoilBinRun(rec, settings.evaluation).curve;
     c.x = curve.displacement_mm, c.force = curve.force_N, c.deformation = curve.deformation_mm;
   }
   return c;
@@ -146,13 +148,13 @@ analysis::Figure caseFigure(const analysis::CaseKey& key, const CalibrationResul
   force.title = "force", deformation.title = "deformation";
   force.x_label = deformation.x_label = key.kind == analysis::CaseKind::SoilBin ? "tool displacement (mm)" : "time (s)";
   force.y_label = "force (N)", deformation.y_label = "deformation (mm)";
-  double peak_s = 0;
+  double step_s = 0;
   bool first = true;
   for (const auto& rec : r.measured) {
     if (rec.key != key) continue;
     if (first && key.kind == analysis::CaseKind::CalibrationWeight)
-      peak_s = analysis::evaluate({rec}, settings).calibration_runs.front().deformation.first_peak_time_s;
-    const Curve c = curveOf(rec, settings, peak_s);
+      step_s = analysis::fitStepResponse(rec.time_s, weightSignals(rec).deformation_mm, rec.csv_path.string()).step_time_s;
+    const Curve c = curveOf(rec, settings, step_s);
     const std::string title = first ? "measured" : "";
     force.series.push_back({title, c.x, c.force, analysis::kMeasuredColor});
     deformation.series.push_back({title, c.x, c.deformation, analysis::kMeasuredColor});
@@ -161,11 +163,11 @@ analysis::Figure caseFigure(const analysis::CaseKey& key, const CalibrationResul
   const auto add = [&](const analysis::Recording* rec, const std::string& title, analysis::SeriesStyle style) {
     if (!rec) return;
     try {
-      const Curve c = curveOf(*rec, settings, peak_s);
+      const Curve c = curveOf(*rec, settings, step_s);
       force.series.push_back({title, c.x, c.force, analysis::kSimulatedColor, style});
       deformation.series.push_back({title, c.x, c.deformation, analysis::kSimulatedColor, style});
     } catch (const analysis::InputError&) {
-      // a run that cannot be evaluated (no oscillation) is left out of the plot; the residuals say so
+      // a run that cannot be evaluated (no overshoot) is left out of the plot; the residuals say so
     }
   };
   add(runOf(r.initial_runs, key), "initial study", analysis::SeriesStyle::DashedLine);

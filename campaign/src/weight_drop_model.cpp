@@ -27,6 +27,7 @@ namespace demfem::campaign {
 namespace {
 
 constexpr int kModes = 40;
+constexpr double kLeadIn_s = 0.1;  // rest before the weight is hung (model.hpp)
 
 // A tool's reduced model at the reference modulus E_ref; depends on neither E, alpha nor beta.
 struct Reduction {
@@ -116,7 +117,7 @@ Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study
   fem::addLumpedMass(loaded, pan, drop.mass_kg / n);
   const int free_count = static_cast<int>(loaded.freeDofs().size());
   const fem::Modes modes = fem::naturalModes(loaded, std::min(kModes, free_count / 2));
-  const fem::Sensors sensors(loaded, tool.constraints.sensor_from_top_m);
+  const fem::Sensors sensors(loaded, tool);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(loaded.dofCount());
   // Load-cell functional c on the reactions (the sensor is linear in them).
   Eigen::VectorXd cell = Eigen::VectorXd::Zero(loaded.dofCount());
@@ -148,6 +149,11 @@ Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study
 
 // Eq (5) and (10) per mode for the step load; returns the recording's columns.
 analysis::Recording integrate(const Basis& b, double scale, const study::Tool& tool, double dt, long steps) {
+  analysis::Recording rec;
+  rec.format = analysis::RecordingFormat::Calibrated;
+  const auto lead_in = static_cast<long>(std::llround(kLeadIn_s / dt));
+  for (long i = 0; i < lead_in; ++i) rec.time_s.push_back(static_cast<double>(i) * dt), rec.force.push_back(0), rec.deformation.push_back(0);
+  const double t0 = static_cast<double>(lead_in) * dt;
   const std::size_t modes = b.omega2.size();
   std::vector<double> q(modes, 0.0), q_prev(modes, 0.0);
   std::vector<double> a1(modes), a2(modes), a3(modes), l1(modes), l2(modes), l3(modes);
@@ -163,9 +169,7 @@ analysis::Recording integrate(const Basis& b, double scale, const study::Tool& t
     l2[j] = 2 * m / dt2 - k / 3;
     l3[j] = -m / dt2 + ck / (2 * dt) - k / 3;
   }
-  analysis::Recording rec;
-  rec.format = analysis::RecordingFormat::Calibrated;
-  rec.time_s.push_back(0), rec.force.push_back(0), rec.deformation.push_back(0);
+  rec.time_s.push_back(t0), rec.force.push_back(0), rec.deformation.push_back(0);
   double cell = 0, cell_prev = 0;  // modal part of the load-cell force at levels i, i-1 (Eq 10)
   const double residual_deformation = b.residual_deformation_mm / scale;
   for (long i = 1; i <= steps; ++i) {
@@ -182,7 +186,7 @@ analysis::Recording integrate(const Basis& b, double scale, const study::Tool& t
     const double cell_next = 3 * cell_sum - cell - cell_prev;  // Eq (10)
     cell_prev = cell;
     cell = cell_next;
-    rec.time_s.push_back(static_cast<double>(i) * dt);
+    rec.time_s.push_back(t0 + static_cast<double>(i) * dt);
     rec.force.push_back(cell + b.residual_force_N);
     rec.deformation.push_back(deformation);
   }

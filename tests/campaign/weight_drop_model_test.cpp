@@ -26,12 +26,19 @@ Difference compareAt(campaign::WeightDropModel& model, double E_Pa, double alpha
   const analysis::Recording modal = model.run(study, key, {});
   const study::Tool& tool = study.tools.front();
   const fem::WeightDropResult direct = fem::simulateWeightDrop(fem::reduce(fem::buildFullModel(tool)), tool, *study.weight_drop, study.fem.dt_s);
-  REQUIRE(modal.size() == direct.samples.size());
+  const std::size_t lead_in = 100;  // 0.1 s at rest before the weight is hung
+  REQUIRE(modal.size() == direct.samples.size() + lead_in);
   Difference d;
   for (std::size_t i = 0; i < modal.size(); ++i) {
-    CHECK(modal.time_s[i] == Approx(direct.samples[i].t_s));
-    d.force = std::max(d.force, std::abs(modal.force[i] - direct.samples[i].force_N) / direct.static_force_N);
-    d.deformation = std::max(d.deformation, std::abs(modal.deformation[i] - direct.samples[i].deformation_mm) / direct.static_deformation_mm);
+    if (i < lead_in) {
+      CHECK(modal.force[i] == 0);
+      CHECK(modal.deformation[i] == 0);
+      continue;
+    }
+    const auto& s = direct.samples[i - lead_in];
+    CHECK(modal.time_s[i] == Approx(s.t_s + 0.1));
+    d.force = std::max(d.force, std::abs(modal.force[i] - s.force_N) / direct.static_force_N);
+    d.deformation = std::max(d.deformation, std::abs(modal.deformation[i] - s.deformation_mm) / direct.static_deformation_mm);
   }
   return d;
 }
@@ -48,6 +55,4 @@ TEST_CASE("the modal weight-drop model reproduces the direct integration, also a
   CHECK(reference.deformation < 2e-3);
   CHECK(rescaled.force < 2e-3);
   CHECK(rescaled.deformation < 2e-3);
-  WARN("largest difference, relative to the static value: force " << reference.force << " / " << rescaled.force << ", deformation "
-                                                                   << reference.deformation << " / " << rescaled.deformation);
 }

@@ -19,9 +19,9 @@
 //   coordinates from central differences of the residuals (step `curvature_step`); covariance
 //   2 H^-1 (Delta chi2 = 1 at one standard deviation); converted to file units (log parameters:
 //   value * ln(hi / lo) * sigma_x).
-// - Identification (Roessler et al. 2019): a parameter is "unidentified" when its one-sigma interval
-//   in optimiser coordinates is wider than `unidentified_fraction` of the bounds, or H is singular
-//   along it; it is then reported without a value (the calibrated study carries the best point
+// - Identification (Roessler et al. 2019): a parameter is "unidentified" when its standard deviation
+//   exceeds `unidentified_fraction` of the bounds (in optimiser coordinates) or
+//   `unidentified_relative` of its value, or H is singular along it (the data then bound it at most); it is then reported without a value (the calibrated study carries the best point
 //   found, one of many that fit equally well). Distinct
 //   minima: local minima of the starts whose chi2 is within `noise_chi2` of the best and that lie
 //   more than three standard deviations apart in some parameter are all listed (non-unique fit).
@@ -64,6 +64,7 @@ struct CalibrationOptions {
   double x_tolerance = 1e-5;
   double curvature_step = 1e-3;
   double unidentified_fraction = 0.25;
+  double unidentified_relative = 0.3;
   double noise_chi2 = 1.0;
   int jobs = 2;
   std::filesystem::path cache_dir;
@@ -83,7 +84,7 @@ struct FittedParameter {
   double initial = 0;              // the study's value
   std::optional<double> value;     // absent: unidentified
   double best = 0;                 // the best point found (what the calibrated study carries)
-  double std_dev = 0;              // file units (infinite when unidentified)
+  double std_dev = 0;              // file units (infinite when H is singular along it)
   bool identified = true;
 };
 

@@ -1,22 +1,26 @@
 // demfem campaign: the calibration objective, per quantity and case, weighted by the measured
 // scatter (docs/calibration.md).
 //
-// Quantities (analysis::evaluate() on measured and simulated recordings alike; docs/analysis.md):
-// - calibration-weight case: steady force_N, steady deformation_mm, frequency_Hz and damping ratio
-//   of the deformation signal (Section 2.10.1, Fig. 8);
-// - soil-bin case: window mean and window standard deviation of force_N and deformation_mm over the
-//   Section 2.3 window (Fig. 15).
-// Residual r = (simulated - measured) / sigma, with sigma the measured scatter of the quantity:
-// - steady values and window means: the larger of the standard deviation between the repeats'
-//   values (two or more repeats) and the standard error of the tail / window samples
-//   (their standard deviation over sqrt(samples));
-// - frequency and damping ratio: the standard deviation of the per-cycle estimates over all repeats
-//   divided by sqrt(cycles) (the scatter of their mean);
-// - window spreads: spread / sqrt(2 (samples - 1)) (the sampling error of a standard deviation);
-// and never below `relative_floor` |measured| (a noise-free recording would otherwise give an
-// infinite weight; the floor is reported). chi2 = sum r^2; the fit minimises chi2.
+// Quantities, computed by the same code for measured and simulated recordings:
+// - calibration-weight case (Section 2.10.1, Fig. 8), from the damped step response fitted to the
+//   whole record (analysis/step_fit.hpp; a resting baseline or DAQ offset drops out):
+//   step_force_N and step_deformation_mm (fitted steady value minus the value before the weight),
+//   frequency_Hz and damping_ratio of the deformation signal;
+// - soil-bin case (Section 2.3, Fig. 15; analysis/evaluation.hpp): window_mean_force_N,
+//   window_std_force_N and, for a deformable tool, window_mean_deformation_mm,
+//   window_std_deformation_mm.
+// Value: the mean over the case's repeats. Its scatter sigma (the uncertainty of that mean):
+// - weight quantities: sqrt(max(s_between^2, mean of the fits' squared standard errors) / R) for R
+//   repeats, s_between the standard deviation between the repeats' values (0 for one repeat);
+// - window means: sqrt(max(s_between^2, sd^2 / N_window) / R), sd the standard deviation of a
+//   repeat's window samples, N_window their number;
+// - window spreads: max(s_between, sd / sqrt(2 (N_window - 1))) / sqrt(R);
+// and never below `relative_floor` |value| (a noise-free recording would otherwise get an infinite
+// weight; the floor is stated in the report).
+// Residual r = (simulated - measured) / sigma_measured; chi2 = sum r^2 is what the fit minimises.
 #pragma once
 
+#include "demfem/analysis/recording.hpp"
 #include "demfem/analysis/workflow.hpp"
 
 #include <nlohmann/json.hpp>
@@ -27,38 +31,41 @@
 namespace demfem::campaign {
 
 struct ObjectiveSettings {
-  analysis::AnalysisSettings analysis;
-  double relative_floor = 1e-3;  // sigma >= relative_floor * |measured|
-  bool soil_deformation = true;  // soil-bin deformation quantities (false for a rigid tool)
+  analysis::AnalysisSettings analysis;  // Section 2.3 window and landmarks for soil-bin runs
+  double relative_floor = 1e-3;         // sigma >= relative_floor * |value|
+  bool soil_deformation = true;         // soil-bin deformation quantities (false for a rigid tool)
 };
+
+// A calibration-weight recording in N and mm (raw DAQ units times the sidecar's factors).
+struct WeightSignals {
+  std::vector<double> time_s, force_N, deformation_mm;
+};
+WeightSignals weightSignals(const analysis::Recording& recording);
+
+// One quantity of one case: the repeats' mean and the scatter of that mean.
+struct Quantity {
+  analysis::CaseKey key;
+  std::string name;  // "step_force_N", "frequency_Hz", "window_mean_force_N", ... (see header comment)
+  double value = 0, sigma = 0;
+};
+
+// The quantities of every case of `recordings`. tolerate_failures = false: a recording that cannot
+// be evaluated throws analysis::InputError naming its file (measured data); true: its case is left
+// out (a simulated run at extreme parameters, e.g. no overshoot to fit).
+std::vector<Quantity> quantities(const std::vector<analysis::Recording>& recordings, const ObjectiveSettings& settings,
+                                 bool tolerate_failures);
 
 struct Residual {
   analysis::CaseKey key;
-  std::string quantity;  // "steady_force_N", "steady_deformation_mm", "frequency_Hz", "damping_ratio",
-                         // "window_mean_force_N", "window_std_force_N", "window_mean_deformation_mm", ...
+  std::string quantity;
   double measured = 0, simulated = 0, sigma = 0;
   double normalized = 0;  // (simulated - measured) / sigma
 };
 
-// One measured quantity with its scatter.
-struct Target {
-  analysis::CaseKey key;
-  std::string quantity;
-  double measured = 0, sigma = 0;
-};
-
-// The targets of every case in `measured` (see header comment). Throws analysis::InputError when a
-// case lacks what a quantity needs (e.g. a weight recording with fewer than two cycles).
-std::vector<Target> targets(const analysis::EvaluationResult& measured, const ObjectiveSettings& settings);
-
-// analysis::evaluate() case by case: a simulated run that cannot be evaluated (e.g. no oscillation
-// to count) is left out instead of failing the whole evaluation.
-analysis::EvaluationResult evaluateEach(const std::vector<analysis::Recording>& runs, const ObjectiveSettings& settings);
-
-// Residuals of `simulated` (one run per case) against `targets`. A target whose case is missing in
-// `simulated`, or whose simulated quantity cannot be evaluated (no oscillation), gets the residual
-// of a simulated value of 0 (a large but finite penalty, so the optimiser can leave the region).
-std::vector<Residual> residuals(const std::vector<Target>& targets, const analysis::EvaluationResult& simulated);
+// Residuals of `simulated` against `measured`, one per measured quantity. A quantity missing on the
+// simulated side is scored as a simulated value of 0 (a large but finite penalty, so the optimiser
+// can leave the region).
+std::vector<Residual> residuals(const std::vector<Quantity>& measured, const std::vector<Quantity>& simulated);
 
 double chi2(const std::vector<Residual>& residuals);
 
