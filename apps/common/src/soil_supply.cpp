@@ -33,8 +33,8 @@ void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::pat
   const std::string reason = adapter::unsettledReason(soil.settling);
   if (reason.empty() || allow_unsettled) return;
   throw InputError("the settled soil " + file.string() + " is not settled: " + reason +
-                   ". Deposit it again with a longer settling (demfem deposit --force), or run on it anyway "
-                   "with --allow-unsettled-soil");
+                   ". Raise soil.deposition.settle_kinetic_energy_J and deposit it again (demfem deposit --force), "
+                   "or run on it anyway with --allow-unsettled-soil");
 }
 
 }  // namespace demfem::cli
