@@ -29,7 +29,7 @@ RemoteProxy::RemoteProxy(const RemoteOptions& options, zmq::context_t* context) 
     throw CouplingError(ErrorCode::VersionMismatch, "DEM server at " + endpoint_ + " speaks protocol version " +
                                                         std::to_string(hello.protocol_version) + ", this client " +
                                                         std::to_string(p::kProtocolVersion));
-  info_ = {hello.backend, hello.backend_version, hello.protocol_version, hello.dem_time_step_s};
+  info_ = {hello.backend, hello.backend_version, hello.protocol_version, hello.dem_time_step_s, hello.soil_json};
 }
 
 RemoteProxy::~RemoteProxy() = default;

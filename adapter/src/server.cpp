@@ -42,7 +42,7 @@ p::ReplyBody Server::dispatch(const p::Request& request) {
                                       ", this server version " + std::to_string(p::kProtocolVersion));
             const BackendInfo info = api_.info();
             hello_done_ = true;
-            return p::HelloReply{p::kProtocolVersion, info.backend, info.version, info.dem_time_step_s};
+            return p::HelloReply{p::kProtocolVersion, info.backend, info.version, info.dem_time_step_s, info.soil_json};
           },
           [&](const p::ListGeometries&) -> p::ReplyBody {
             p::GeometriesReply reply;

@@ -49,7 +49,7 @@ class AnalyticBackend final : public CouplingApi {
 
   BackendInfo info() override {
     live();
-    return {name_, "analytic-1", 1, load_.dem_time_step_s};
+    return {name_, "analytic-1", 1, load_.dem_time_step_s, ""};
   }
 
   std::vector<GeometryInfo> geometries() override {

@@ -5,6 +5,7 @@
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
+#include "demfem/cli/soil_supply.hpp"
 #include "demfem/protocol/transport.hpp"
 #include "demfem/study/study.hpp"
 #if DEMFEM_WITH_LIGGGHTS
@@ -30,6 +31,7 @@ struct Options {
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
   int threads = 0;            // 0: the study's dem.threads
+  bool allow_unsettled_soil = false;
   adapter::TestLoad load;
 };
 
@@ -37,15 +39,21 @@ std::chrono::milliseconds millis(double seconds) {
   return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
 }
 
-std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::string& backend,
-                                                   const std::optional<study::Study>& study) {
-  const auto& tests = adapter::testBackendNames();
-  if (std::find(tests.begin(), tests.end(), backend) != tests.end())
-    return adapter::makeTestBackend(backend, study ? study->tools : std::vector<study::Tool>{study::Tool{}}, o.load);
-  if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
+// A soil deposited by the other backend than the one serving is deposited here (this process,
+// before the backend is built) when its file is missing; the serving backend deposits its own.
+void provideSoil(const study::Study& study, const std::string& backend) {
+  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+  const std::string& deposition = study::depositionBackendName(study.soil.deposition_backend);
+  if (std::filesystem::exists(file) || deposition == backend) return;
+  std::cerr << "demfem-dem: depositing the soil with " << deposition << " into " << file.string() << std::endl;
+  cli::DepositCost cost;
+  adapter::writeSettledSoil(file, cli::depositWith(study.soil.deposition_backend, study, study.dem.threads, cost, false));
+}
+
+std::unique_ptr<adapter::CouplingApi> makeSoilBackend(const std::string& backend, const study::Study& study) {
   if (backend == "builtin") {
-    cli::Progress deposition("deposition", true);
-    auto api = builtin::makeBackend(*study, [&deposition](double fraction, const std::string& stage_line) {
+    cli::Progress deposition("deposition", true);  // reports only when the backend deposits
+    auto api = builtin::makeBackend(study, [&deposition](double fraction, const std::string& stage_line) {
       if (!stage_line.empty()) std::cerr << "deposition: " << stage_line << std::endl;
       deposition.update(fraction);
     });
@@ -53,13 +61,29 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::s
     return api;
   }
 #if DEMFEM_WITH_LIGGGHTS
-  if (backend == "liggghts") return liggghts::makeBackend(*study);
+  if (backend == "liggghts") return liggghts::makeBackend(study);
 #else
   if (backend == "liggghts")
     throw cli::InputError("this demfem-dem was built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF)");
 #endif
-  throw cli::InputError("unknown backend '" + backend + "' (builtin, liggghts, constant, harmonic, spring)");
+  throw std::logic_error("makeSoilBackend: not a soil backend: " + backend);
 }
+
+std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::string& backend,
+                                                   const std::optional<study::Study>& study) {
+  const auto& tests = adapter::testBackendNames();
+  if (std::find(tests.begin(), tests.end(), backend) != tests.end())
+    return adapter::makeTestBackend(backend, study ? study->tools : std::vector<study::Tool>{study::Tool{}}, o.load);
+  if (backend != "builtin" && backend != "liggghts")
+    throw cli::InputError("unknown backend '" + backend + "' (builtin, liggghts, constant, harmonic, spring)");
+  if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
+  provideSoil(*study, backend);
+  auto api = makeSoilBackend(backend, *study);
+  const auto file = adapter::settledSoilFile(*study, adapter::defaultSoilDirectory());
+  cli::requireSettled(adapter::readSettledSoil(file, *study), file, o.allow_unsettled_soil);
+  return api;
+}
+
 
 void run(const Options& o) {
   if (!o.make_curve_keys.empty()) {
@@ -134,6 +158,9 @@ int main(int argc, char** argv) {
   app.add_option("--idle-timeout-s", o.idle_timeout_s,
                  "Give up if the client sends nothing for this long (s); default: twice the study's coupling timeout")
       ->check(CLI::PositiveNumber);
+  app.add_flag("--allow-unsettled-soil", o.allow_unsettled_soil,
+               "Serve even if the settled soil is not settled (a deposition stage hit its time cap or the kinetic "
+               "energy is above the study's threshold); refused by default");
   app.add_option("--test-force-N", o.load.force_N, "Test backends: total tip-row force F along local z (N)");
   app.add_option("--test-frequency-Hz", o.load.frequency_Hz, "Harmonic test backend: frequency f (Hz)");
   app.add_option("--test-stiffness-N-m", o.load.stiffness_N_m, "Spring test backend: total tip-row stiffness k (N/m)");

@@ -1,9 +1,10 @@
-// `demfem deposit STUDY`: deposits and settles a study's soil once with the built-in DEM and saves it
-// where every study on the same soil finds it (by soil hash).
+// `demfem deposit STUDY [--backend builtin|liggghts]`: deposits and settles a study's soil once and
+// saves it as the backend-neutral settled-soil file (adapter/settled_soil.hpp) that every run of a
+// study on the same soil, on either DEM backend, starts from.
 #include "commands.hpp"
-#include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/cli/cli_support.hpp"
-#include "demfem/cli/progress.hpp"
+#include "demfem/cli/soil_supply.hpp"
 #include "demfem/study/study.hpp"
 
 #include <nlohmann/json.hpp>
@@ -20,65 +21,92 @@ namespace {
 struct DepositOptions {
   std::string study_file;
   std::string soil_dir;
+  std::string backend;
   int threads = 0;
   bool force = false;
   bool quiet = false;
 };
+
+nlohmann::json settlingJson(const adapter::SettledSoil& soil) {
+  const auto& s = soil.settling;
+  return {{"particles", soil.particles.size()},
+          {"settled", adapter::unsettledReason(s).empty()},
+          {"kinetic_energy_J", s.kinetic_energy_J},
+          {"threshold_J", s.threshold_J},
+          {"stages", s.stages},
+          {"stages_capped", s.stages_capped},
+          {"simulated_s", s.simulated_s},
+          {"surface_height_mm", s.surface_height_m * 1e3},
+          {"packing_fraction", s.packing_fraction},
+          {"deposition_backend", study::depositionBackendName(soil.backend)},
+          {"deposition_seed", soil.seed},
+          {"deposition_cores", soil.cores}};
+}
+
+void printSoil(const std::filesystem::path& file, const adapter::SettledSoil& soil) {
+  const auto& s = soil.settling;
+  const std::string reason = adapter::unsettledReason(s);
+  std::cout << file.string() << ": " << soil.particles.size() << " particles deposited by "
+            << study::depositionBackendName(soil.backend) << " (seed " << soil.seed << "), surface at "
+            << s.surface_height_m * 1e3 << " mm, packing fraction " << s.packing_fraction << ", kinetic energy "
+            << s.kinetic_energy_J << " J (threshold " << s.threshold_J << " J), " << s.stages_capped << " of "
+            << s.stages << " stages capped" << (reason.empty() ? "" : "; NOT SETTLED: " + reason) << '\n';
+}
 }  // namespace
 
 void addDepositCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "deposit",
-      "Deposit the soil of a study by gravity in layers with the built-in DEM, settle it below the study's "
-      "kinetic-energy threshold and save it as soil-<hash>.bin (the hash covers everything that determines the "
-      "soil). Runs reuse the file; an existing file is kept unless --force.");
+      "Deposit the soil of a study by gravity in layers, settle it below the study's kinetic-energy threshold and "
+      "save it as soil-<hash>.bin, the settled soil both DEM backends start from (the hash covers everything that "
+      "determines the soil, including the deposition backend). Runs reuse the file; an existing file is kept "
+      "unless --force. An unsettled soil is saved with its figures; runs refuse it unless --allow-unsettled-soil.");
   auto opt = std::make_shared<DepositOptions>();
   cmd->add_option("STUDY", opt->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--backend", opt->backend,
+                  "DEM that deposits: builtin | liggghts (default: the study's soil.deposition.backend). The soil is "
+                  "the study's only if its soil.deposition.backend names the same backend")
+      ->check(CLI::IsMember({"builtin", "liggghts"}));
   cmd->add_option("--soil-dir", opt->soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
-  cmd->add_option("--threads", opt->threads, "OpenMP threads (default: the study's /dem/threads)")->check(CLI::PositiveNumber);
+  cmd->add_option("--threads", opt->threads, "OpenMP threads of the built-in deposition (default: the study's /dem/threads)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--force", opt->force, "Deposit again even if the file exists");
   cmd->add_flag("--quiet", opt->quiet, "No progress output");
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([opt, &json_target] {
-    const study::Study s = study::loadStudy(opt->study_file);
+    study::Study s = study::loadStudy(opt->study_file);
+    if (!opt->backend.empty()) s.soil.deposition_backend = study::parseDepositionBackend(opt->backend);
     const std::filesystem::path dir =
-        opt->soil_dir.empty() ? builtin::defaultSoilDirectory() : std::filesystem::path(opt->soil_dir);
-    const auto file = builtin::soilFile(s, dir);
+        opt->soil_dir.empty() ? adapter::defaultSoilDirectory() : std::filesystem::path(opt->soil_dir);
+    const auto file = adapter::settledSoilFile(s, dir);
     const bool text = textOnStdout(json_target);
     nlohmann::json report{{"study", opt->study_file}, {"soil_file", file.string()}, {"soil_hash", study::soilHash(s)}};
     if (std::filesystem::exists(file) && !opt->force) {
-      const auto soil = builtin::readSettledSoil(file);
-      if (text) std::cout << file.string() << ": already deposited (" << soil.particles.size() << " particles)\n";
+      const auto soil = adapter::readSettledSoil(file, s);
+      if (text) std::cout << "already deposited: ", printSoil(file, soil);
       report["reused"] = true;
-      report["particles"] = soil.particles.size();
+      report.update(settlingJson(soil));
+      report["file_checksum"] = adapter::settledSoilChecksum(file);
       writeJson(json_target, report);
       return;
     }
     const int threads = opt->threads > 0 ? opt->threads : s.dem.threads;
-    builtin::DepositReport r;
+    DepositCost cost;
     const auto start = std::chrono::steady_clock::now();
-    Progress progress("deposition", !opt->quiet);
-    const auto soil = builtin::depositSoil(s, threads, r, [&](double fraction, const std::string& stage_line) {
-      if (!stage_line.empty() && !opt->quiet) std::cerr << "deposition: " << stage_line << std::endl;
-      progress.update(fraction);
-    });
-    progress.finish(std::to_string(r.particles) + " particles");
-    builtin::writeSettledSoil(file, soil);
+    const auto soil = depositWith(s.soil.deposition_backend, s, threads, cost, opt->quiet);
+    adapter::writeSettledSoil(file, soil);
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (text)
-      std::cout << file.string() << ": " << r.particles << " particles, surface at " << r.surface_height_m * 1e3
-                << " mm, " << r.steps << " steps of " << r.time_step_s << " s (" << r.simulated_s << " s simulated, "
-                << wall_s << " s wall)" << (r.settled ? "" : "; WARNING: a stage hit its time cap before settling")
-                << '\n';
+    if (text) {
+      printSoil(file, soil);
+      if (cost.steps > 0) std::cout << "  " << cost.steps << " steps of " << cost.time_step_s << " s";
+      std::cout << "  " << wall_s << " s wall\n";
+    }
     report["reused"] = false;
-    report["particles"] = r.particles;
-    report["surface_height_mm"] = r.surface_height_m * 1e3;
-    report["steps"] = r.steps;
-    report["time_step_s"] = r.time_step_s;
-    report["simulated_s"] = r.simulated_s;
+    report.update(settlingJson(soil));
+    report["file_checksum"] = adapter::settledSoilChecksum(file);
+    report["steps"] = cost.steps;
+    report["time_step_s"] = cost.time_step_s;
     report["wall_time_s"] = wall_s;
-    report["final_kinetic_energy_J"] = r.final_kinetic_energy_J;
-    report["settled"] = r.settled;
     writeJson(json_target, report);
   });
 }

@@ -4,7 +4,9 @@
 // leaves its outputs complete or marked incomplete (fem/coupled_driver.hpp).
 #include "commands.hpp"
 
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/cli/soil_supply.hpp"
 #include "demfem/study/study.hpp"
 
 #include <signal.h>
@@ -43,6 +45,7 @@ struct RunOptions {
   int threads = 0;
   bool resume = false;
   bool quiet = false;
+  bool allow_unsettled_soil = false;
 };
 
 // A child process started with posix_spawn; waited for at most once.
@@ -119,6 +122,12 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   const study::Study study = study::loadStudy(o.study_file);  // validate before starting anything
   if (study.kind == study::StudyKind::WeightDrop)
     throw InputError(o.study_file + ": a weight-drop study has no DEM side; run it with: demfem-fem weight-drop " + o.study_file);
+  const std::string& backend = o.backend.empty() ? study.dem.backend : o.backend;
+  if (study::hasSoil(study.kind) && (backend == "builtin" || backend == "liggghts")) {
+    // A soil already deposited is checked before anything starts (demfem-dem checks one it deposits).
+    const fs::path soil = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+    if (fs::exists(soil)) requireSettled(adapter::readSettledSoil(soil, study), soil, o.allow_unsettled_soil);
+  }
   const fs::path dem_exe = siblingExecutable("demfem-dem"), fem_exe = siblingExecutable("demfem-fem");
   const fs::path work = fs::temp_directory_path() / ("demfem-run-" + std::to_string(getpid()));
   fs::create_directories(work);
@@ -136,6 +145,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
                                     endpoint_file.string()};
   if (!o.backend.empty()) dem_args.insert(dem_args.end(), {"--backend", o.backend});
   if (o.threads > 0) dem_args.insert(dem_args.end(), {"--threads", std::to_string(o.threads)});
+  if (o.allow_unsettled_soil) dem_args.push_back("--allow-unsettled-soil");
   if (!o.output_dir.empty()) dem_args.insert(dem_args.end(), {"--output", o.output_dir});
   Child dem("demfem-dem", dem_args);
 
@@ -199,6 +209,8 @@ void addRunCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");
+  cmd->add_flag("--allow-unsettled-soil", o->allow_unsettled_soil,
+                "Run even if the settled soil is not settled (refused by default; the soil's figures are in sensors.json)");
   std::string& json = addJsonOption(*cmd);
   cmd->callback([o, &json] { runLocal(*o, json); });
 }

@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
     const study::Study base = study::loadStudy(study_file);
     if (base.tools.empty()) throw cli::InputError(study_file + ": the benchmark needs a tool");
     const auto& tool = base.tools[0];
-    const std::filesystem::path dir = soil_dir.empty() ? defaultSoilDirectory() : std::filesystem::path(soil_dir);
+    const std::filesystem::path dir = soil_dir.empty() ? adapter::defaultSoilDirectory() : std::filesystem::path(soil_dir);
 
     study::ContactModel edem = base.soil.contact;
     edem.normal = study::NormalModel::EdemHysteretic;
@@ -124,17 +124,17 @@ int main(int argc, char** argv) {
       st.dem.criterion = study::TimeStepCriterion::StiffestSpring;
       st.dem.dt_fraction = 0.1;
       st.soil.settle_kinetic_energy_J = settle_J;
-      const auto file = soilFile(st, dir);
-      SettledSoil settled;
+      const auto file = adapter::settledSoilFile(st, dir);
+      adapter::SettledSoil settled;
       if (std::filesystem::exists(file)) {
-        settled = readSettledSoil(file);
+        settled = adapter::readSettledSoil(file, st);
       } else {
         std::cerr << c.label << ": depositing " << file.string() << " (once)\n";
         DepositReport r;
         settled = depositSoil(st, 2, r, [](double, const std::string& line) {
           if (!line.empty()) std::cerr << line << '\n';
         });
-        writeSettledSoil(file, settled);
+        adapter::writeSettledSoil(file, settled);
       }
       // Insert the tool with this model (untimed, at 0.3 m/s, as the LIGGGHTS benchmark does, to keep it
       // short) and keep the particle states.

@@ -1,17 +1,25 @@
-// Backend benchmark: the same study, contact law (plain hooke, tangential history, cdt rolling
-// friction) and calls on the built-in DEM and on LIGGGHTS, side by side: particle-steps per second on
-// 1 and 2 cores (built-in: OpenMP threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean
-// draught force over the same drag window with its scatter over the seeds. Deposition and insertion
-// are not timed. Prints a table; --json writes the same numbers.
+// Backend benchmark: the built-in DEM and LIGGGHTS side by side on the same settled soil (the
+// backend-neutral soil file both read, deposited once per seed by the study's deposition backend).
+// - Speed (default): the study's soil and first tool with plain hooke, tangential history and cdt
+//   rolling friction, the same calls on both backends: particle-steps per second on 1 and 2 cores
+//   (built-in: OpenMP threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean draught
+//   force over the same drag window with its scatter over the seeds. Deposition and insertion are
+//   not timed.
+// - --coupled: the study as it is (contact laws included), run coupled with the FEM client
+//   (fem::CoupledDriver) in-process on each backend, one core, per seed: mean draught and mean
+//   load-cell force over the drag phase, their mean and scatter over the seeds and the difference
+//   between the backends in standard errors.
+// Prints a table; --json writes the same numbers.
 //
 // Every LIGGGHTS run starts this program again under `mpirun -np N` in worker mode (--worker), so that
 // this process never initialises MPI: an MPI singleton's environment, inherited by a child mpirun,
 // makes that mpirun fail (the 2-rank runs failed so before).
-#include "demfem/backends/builtin/backend.hpp"
-#include "demfem/backends/builtin/soil_bin.hpp"
-#include "demfem/backends/liggghts/backend.hpp"
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/adapter/tool_drive.hpp"
+#include "demfem/backends/builtin/backend.hpp"
+#include "demfem/backends/liggghts/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/fem/coupled_driver.hpp"
 #include "demfem/study/study.hpp"
 
 #include <chrono>
@@ -20,7 +28,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
+#include <map>
 #include <unistd.h>
 
 namespace {
@@ -36,28 +46,27 @@ struct RunResult {
   std::int64_t steps = 0;
   double wall_s = 0;
   double draught_N = 0;  // mean force on the tool against the drag (-z), over the window
+  double load_cell_N = std::numeric_limits<double>::quiet_NaN();  // coupled: mean load-cell force of the drag
   double surface_mm = std::numeric_limits<double>::quiet_NaN();  // soilSurface() of the run's soil
   double particleStepsPerSecond() const { return static_cast<double>(particles) * static_cast<double>(steps) / wall_s; }
 };
 
 nlohmann::json toJson(const RunResult& r) {
-  return {{"backend", r.backend}, {"cores", r.cores},      {"seed", r.seed},
-          {"particles", r.particles}, {"steps", r.steps}, {"wall_s", r.wall_s},
-          {"draught_N", r.draught_N}, {"particle_steps_per_s", r.particleStepsPerSecond()},
+  return {{"backend", r.backend},     {"cores", r.cores},        {"seed", r.seed},
+          {"particles", r.particles}, {"steps", r.steps},        {"wall_s", r.wall_s},
+          {"draught_N", r.draught_N}, {"load_cell_N", r.load_cell_N}, {"particle_steps_per_s", r.particleStepsPerSecond()},
           {"surface_mm", r.surface_mm}};
 }
 
-// Height of the settled soil's surface (mm above the floor): the mean top (y + r) of the particles
-// whose top lies within one largest diameter of the highest top. The tool's depth is measured from
-// the study's fill height, so a surface above it means a deeper cut.
-double soilSurface_mm(const std::vector<std::array<double, 2>>& y_and_radius, double diameter_max_m) {
-  double highest = 0;
-  for (const auto& p : y_and_radius) highest = std::max(highest, p[0] + p[1]);
-  double sum = 0;
-  int count = 0;
-  for (const auto& p : y_and_radius)
-    if (p[0] + p[1] > highest - diameter_max_m) sum += p[0] + p[1], ++count;
-  return 1e3 * sum / count;
+RunResult fromJson(const nlohmann::json& j) {
+  RunResult r;
+  r.backend = j.at("backend"), r.cores = j.at("cores"), r.seed = j.at("seed"), r.particles = j.at("particles");
+  r.steps = j.at("steps"), r.wall_s = j.at("wall_s");
+  // NaN (no drag interval, no coupled run) is written as null.
+  r.draught_N = j.at("draught_N").is_null() ? std::nan("") : j.at("draught_N").get<double>();
+  if (!j.at("load_cell_N").is_null()) r.load_cell_N = j.at("load_cell_N");
+  if (!j.at("surface_mm").is_null()) r.surface_mm = j.at("surface_mm");
+  return r;
 }
 
 // The study both backends run: the file's soil and tool with the LIGGGHTS-compatible contact law.
@@ -67,25 +76,40 @@ constexpr double kInsertionVelocity_m_s = 0.3;
 // Settling threshold of the benchmark's soil (J); 0: the study's soil.settle_kinetic_energy_J.
 double g_settle_kinetic_energy_J = 0;
 
-// LIGGGHTS drags through the built-in backend's settled soil of the same seed (1 thread) instead of
-// its own: the two contact implementations on the same particles.
-bool g_liggghts_on_builtin_soil = false;
+// Deposition backend of every soil ("": the study's soil.deposition.backend).
+std::string g_deposition;
+
+// Coupled mode: the study as it is with the FEM client; g_fem_steps > 0 stops after that many FEM steps.
+bool g_coupled = false;
+std::int64_t g_fem_steps = 0;
 
 // Length of one simulate() call (s); 0: the study's FEM step, as a coupled run calls it. A call as
 // long as the window times the engines alone: LIGGGHTS then does its run set-up (`pre yes`) once
 // instead of once per coupling interval.
 double g_interval_s = 0;
 
-study::Study benchStudy(const std::string& file, std::uint64_t seed, int cores) {
+// The study file with the benchmark's seed, cores, deposition backend and settling threshold.
+study::Study seededStudy(const std::string& file, std::uint64_t seed, int cores) {
   study::Study s = study::loadStudy(file);
   if (g_settle_kinetic_energy_J > 0) s.soil.settle_kinetic_energy_J = g_settle_kinetic_energy_J;
+  if (!g_deposition.empty()) s.soil.deposition_backend = study::parseDepositionBackend(g_deposition);
+  s.soil.deposition_seed = seed;
+  s.dem.threads = cores;
+  if (s.tools.empty()) throw cli::InputError(file + ": the benchmark drags the study's first tool; it has none");
+  return s;
+}
+
+double surface_mm(const study::Study& s) {
+  const auto file = adapter::settledSoilFile(s, adapter::defaultSoilDirectory());
+  return 1e3 * adapter::readSettledSoil(file, s).settling.surface_height_m;
+}
+
+study::Study benchStudy(const std::string& file, std::uint64_t seed, int cores) {
+  study::Study s = seededStudy(file, seed, cores);
   s.soil.contact.normal = study::NormalModel::Hooke;
   s.soil.contact.tangential_history = true;
   s.soil.contact.cohesion = study::CohesionModel::None;
   s.soil.contact.rolling = study::RollingModel::Cdt;
-  s.soil.deposition_seed = seed;
-  s.dem.threads = cores;
-  if (s.tools.empty()) throw cli::InputError(file + ": the benchmark drags the study's first tool; it has none");
   s.tools.front().motion.insertion_velocity_m_s = kInsertionVelocity_m_s;
   return s;
 }
@@ -112,38 +136,104 @@ RunResult drag(adapter::CouplingApi& dem, const study::Study& s, double window_s
   return r;
 }
 
+// Forwards every call to the backend; after each simulate() of the drag phase (the tool's rigid
+// motion along +z only) adds the tool's draught, -sum f_z of the interval-mean node forces.
+class DraughtTap final : public adapter::CouplingApi {
+ public:
+  DraughtTap(adapter::CouplingApi& dem, std::string tool) : dem_(dem), tool_(std::move(tool)) {}
+  adapter::BackendInfo info() override { return dem_.info(); }
+  std::vector<adapter::GeometryInfo> geometries() override { return dem_.geometries(); }
+  double time() override { return dem_.time(); }
+  adapter::NodeArray nodePositions(const std::string& g) override { return dem_.nodePositions(g); }
+  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode mode) override { return dem_.nodeForces(g, mode); }
+  void setNodePositions(const std::string& g, const adapter::NodeArray& xyz) override { dem_.setNodePositions(g, xyz); }
+  void simulate(double duration_s) override {
+    dem_.simulate(duration_s);
+    if (!dragging_) return;
+    const auto f = dem_.nodeForces(tool_, adapter::ForceMode::IntervalMean);
+    for (std::size_t k = 2; k < f.size(); k += 3) sum_N_ -= f[k];
+    ++intervals_;
+  }
+  adapter::RigidMotion rigidMotion(const std::string& g) override { return dem_.rigidMotion(g); }
+  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override {
+    dem_.setRigidMotion(g, m);
+    if (g == tool_) dragging_ = m.velocity_m_s[2] > 0 && m.velocity_m_s[0] == 0 && m.velocity_m_s[1] == 0;
+  }
+  void checkpoint(const std::filesystem::path& file) override { dem_.checkpoint(file); }
+  void restore(const std::filesystem::path& file) override { dem_.restore(file); }
+  void shutdown() override { dem_.shutdown(); }
+  double meanDraught_N() const { return intervals_ ? sum_N_ / static_cast<double>(intervals_) : std::nan(""); }
+
+ private:
+  adapter::CouplingApi& dem_;
+  std::string tool_;
+  bool dragging_ = false;
+  double sum_N_ = 0;
+  long intervals_ = 0;
+};
+
+// The study as it is, coupled with the FEM client in this process (FEM model built first, untimed):
+// mean draught and mean load-cell force over the drag phase (or the first g_fem_steps FEM steps).
+RunResult coupledRun(const study::Study& s, const std::function<std::unique_ptr<adapter::CouplingApi>()>& make,
+                     const std::function<std::int64_t(adapter::CouplingApi&)>& particles) {
+  fem::CoupledRunOptions options;
+  options.output_dir = std::filesystem::temp_directory_path() /
+                       ("demfem-bench-coupled-" + std::to_string(::getpid()) + "-" + std::to_string(s.soil.deposition_seed));
+  if (g_fem_steps > 0) options.max_steps = g_fem_steps;
+  fem::CoupledDriver driver(s, options);
+  auto dem = make();
+  DraughtTap tap(*dem, s.tools.front().name);
+  const double dt = dem->info().dem_time_step_s;
+  RunResult r;
+  r.particles = particles(*dem);
+  const double t0 = dem->time();
+  const auto summary = driver.run(tap);
+  r.wall_s = summary.wall_time_s;
+  r.steps = std::llround((dem->time() - t0) / dt);
+  r.draught_N = tap.meanDraught_N();
+  r.load_cell_N = summary.mean_force_N;
+  r.surface_mm = surface_mm(s);
+  std::error_code ignored;
+  std::filesystem::remove_all(options.output_dir, ignored);
+  return r;
+}
+
 RunResult runBuiltin(const std::string& file, std::uint64_t seed, int cores, double window_s) {
+  if (g_coupled) {
+    const auto s = seededStudy(file, seed, cores);
+    RunResult r = coupledRun(s, [&s] { return builtin::makeBackend(s); }, [](adapter::CouplingApi& dem) {
+      return nlohmann::json::parse(dem.info().soil_json).at("particles").get<std::int64_t>();
+    });
+    r.backend = "builtin", r.cores = cores, r.seed = seed;
+    return r;
+  }
   const auto s = benchStudy(file, seed, cores);
   auto dem = builtin::makeBackend(s);
-  const auto soil_file = builtin::soilFile(s, builtin::defaultSoilDirectory());
-  const auto settled = builtin::readSettledSoil(soil_file).particles;
-  std::vector<std::array<double, 2>> y_and_radius;
-  for (const auto& p : settled) y_and_radius.push_back({p.x[1], p.radius});
-  RunResult r = drag(*dem, s, window_s, static_cast<std::int64_t>(settled.size()));
-  r.surface_mm = soilSurface_mm(y_and_radius, s.soil.diameter_max_m);
+  const auto particles = nlohmann::json::parse(dem->info().soil_json).at("particles").get<std::int64_t>();
+  RunResult r = drag(*dem, s, window_s, particles);
+  r.surface_mm = surface_mm(s);
   r.backend = "builtin", r.cores = cores, r.seed = seed;
   return r;
 }
 
 // Rank 0 of a LIGGGHTS run (the worker under mpirun); followers return {}.
 std::optional<RunResult> runLiggghts(const std::string& file, std::uint64_t seed, double window_s) {
-  const auto s = benchStudy(file, seed, 1);
-  liggghts::BackendOptions options;  // every rank builds the same simulation, so the same options
-  if (g_liggghts_on_builtin_soil)
-    for (const auto& p : builtin::readSettledSoil(builtin::soilFile(s, builtin::defaultSoilDirectory())).particles)
-      options.settled_soil.push_back({p.x, p.radius, s.soil.layers[static_cast<std::size_t>(p.layer)].material});
+  const auto s = g_coupled ? seededStudy(file, seed, 1) : benchStudy(file, seed, 1);
   if (!liggghts::isLeaderRank()) {
-    liggghts::followLeader(s, options);
+    liggghts::followLeader(s);
     return std::nullopt;
   }
-  auto dem = liggghts::makeBackend(s, options);
   int ranks = 1;
   if (const char* size = std::getenv("OMPI_COMM_WORLD_SIZE")) ranks = std::atoi(size);
-  std::vector<std::array<double, 2>> y_and_radius;
-  if (ranks == 1)  // particle positions are offered on one rank; 2-rank runs read the same soil file
-    for (const auto& p : liggghts::particles(*dem)) y_and_radius.push_back({p[1], p[3]});
+  if (g_coupled) {
+    RunResult r = coupledRun(s, [&s] { return liggghts::makeBackend(s); },
+                             [](adapter::CouplingApi& dem) { return liggghts::particleCount(dem); });
+    r.backend = "liggghts", r.cores = ranks, r.seed = seed;
+    return r;
+  }
+  auto dem = liggghts::makeBackend(s);
   RunResult r = drag(*dem, s, window_s, liggghts::particleCount(*dem));
-  if (ranks == 1) r.surface_mm = soilSurface_mm(y_and_radius, s.soil.diameter_max_m);
+  r.surface_mm = surface_mm(s);
   r.backend = "liggghts", r.cores = ranks, r.seed = seed;
   dem->shutdown();
   return r;
@@ -165,17 +255,14 @@ RunResult runLiggghtsRanks(const std::string& file, std::uint64_t seed, int rank
                               DEMFEM_MPIEXEC + " -np " + std::to_string(ranks) + " --oversubscribe '" + self.string() +
                               "' --study '" + file + "' --worker " + std::to_string(seed) + " --window-s " + window +
                               " --settle-kinetic-energy-J " + settle + " --interval-s " + interval +
-                              (g_liggghts_on_builtin_soil ? " --liggghts-on-builtin-soil" : "") +
+                              (g_deposition.empty() ? "" : " --deposition " + g_deposition) +
+                              (g_coupled ? " --coupled --steps " + std::to_string(g_fem_steps) : "") +
                               " --json '" + result.string() + "'";
   if (std::system(command.c_str()) != 0) throw std::runtime_error("the LIGGGHTS run under mpirun failed: " + command);
   std::ifstream in(result);
   const auto j = nlohmann::json::parse(in);
   std::filesystem::remove(result);
-  RunResult r;
-  r.backend = j.at("backend"), r.cores = j.at("cores"), r.seed = j.at("seed"), r.particles = j.at("particles");
-  r.steps = j.at("steps"), r.wall_s = j.at("wall_s"), r.draught_N = j.at("draught_N");
-  if (!j.at("surface_mm").is_null()) r.surface_mm = j.at("surface_mm");
-  return r;
+  return fromJson(j);
 }
 
 struct Summary {
@@ -203,7 +290,7 @@ int main(int argc, char** argv) {
   int seeds = 3;
   double window_s = 1.0;
   std::uint64_t worker_seed = 0;
-  app.add_option("--study", file, "Study whose soil and first tool are used (contact law replaced)")
+  app.add_option("--study", file, "Study whose soil and first tool are used (speed runs replace its contact law, --coupled runs keep it)")
       ->check(CLI::ExistingFile);
   app.add_option("--seeds", seeds, "Deposition seeds 1..N for the draught-force scatter")->check(CLI::PositiveNumber);
   app.add_option("--window-s", window_s, "Simulated drag time that is timed and averaged (s)")
@@ -216,8 +303,16 @@ int main(int argc, char** argv) {
                  "Simulated time per simulate() call (s); default: the study's FEM step. Equal to --window-s: "
                  "one call, the engines' own speed without per-call set-up")
       ->check(CLI::NonNegativeNumber);
-  app.add_flag("--liggghts-on-builtin-soil", g_liggghts_on_builtin_soil,
-               "LIGGGHTS starts from the built-in backend's settled soil of the same seed (same particles)");
+  app.add_option("--deposition", g_deposition,
+                 "Backend that deposits every soil both backends start from: builtin | liggghts (default: the study's "
+                 "soil.deposition.backend)")
+      ->check(CLI::IsMember({"builtin", "liggghts"}));
+  app.add_flag("--coupled", g_coupled,
+               "Run the study as it is, coupled with the FEM client, on one core per backend: mean draught and "
+               "load-cell force over the drag phase");
+  app.add_option("--steps", g_fem_steps, "--coupled: stop after this many FEM steps (insertion included; default: "
+                                         "the whole study)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--worker", worker_seed, "Internal: run LIGGGHTS with this seed as an MPI job and write --json");
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
@@ -225,52 +320,84 @@ int main(int argc, char** argv) {
       if (const auto r = runLiggghts(file, worker_seed, window_s)) cli::writeJson(json_target, toJson(*r));
       return;
     }
-    std::printf("%-9s %5s %5s %9s %10s %8s %9s %14s %11s\n", "backend", "cores", "seed", "particles", "surface_mm",
-                "steps", "wall_s", "particle-st/s", "draught_N");
+    const bool text = json_target != "-";
+    if (text)
+      std::printf("%-9s %5s %5s %9s %10s %8s %9s %14s %11s %11s\n", "backend", "cores", "seed", "particles",
+                  "surface_mm", "steps", "wall_s", "particle-st/s", "draught_N", "load_cell_N");
     std::vector<RunResult> runs;
-    auto record = [&runs](const RunResult& r) {  // one row as soon as a run ends: runs are long
+    auto record = [&runs, text](const RunResult& r) {  // one row as soon as a run ends: runs are long
       runs.push_back(r);
-      std::printf("%-9s %5d %5llu %9lld %10.2f %8lld %9.2f %14.3e %11.4f\n", r.backend.c_str(), r.cores,
+      if (!text) return;
+      std::printf("%-9s %5d %5llu %9lld %10.2f %8lld %9.2f %14.3e %11.4f %11.4f\n", r.backend.c_str(), r.cores,
                   static_cast<unsigned long long>(r.seed), static_cast<long long>(r.particles), r.surface_mm,
-                  static_cast<long long>(r.steps), r.wall_s, r.particleStepsPerSecond(), r.draught_N);
+                  static_cast<long long>(r.steps), r.wall_s, r.particleStepsPerSecond(), r.draught_N, r.load_cell_N);
       std::fflush(stdout);
     };
+    // The soil's own backend runs first on each seed: its construction deposits the soil file.
+    const bool liggghts_first = seededStudy(file, 1, 1).soil.deposition_backend == study::DepositionBackend::Liggghts;
+    const std::vector<int> core_counts = g_coupled ? std::vector<int>{1} : std::vector<int>{1, 2};
     for (int seed = 1; seed <= seeds; ++seed)
-      for (int cores : {1, 2}) {
-        record(runBuiltin(file, static_cast<std::uint64_t>(seed), cores, window_s));
-        record(runLiggghtsRanks(file, static_cast<std::uint64_t>(seed), cores, window_s));
+      for (int cores : core_counts) {
+        const auto seed_u = static_cast<std::uint64_t>(seed);
+        if (liggghts_first) record(runLiggghtsRanks(file, seed_u, cores, window_s));
+        record(runBuiltin(file, seed_u, cores, window_s));
+        if (!liggghts_first) record(runLiggghtsRanks(file, seed_u, cores, window_s));
       }
 
-    // Per backend and core count: speed and draught, mean and sample standard deviation over seeds.
+    // Per backend and core count: speed, draught and load cell, mean and sample standard deviation
+    // over seeds; per core count the difference of the backends against its standard error.
     nlohmann::json summary = nlohmann::json::object();
-    for (int cores : {1, 2}) {
-      double speed[2] = {0, 0};
+    for (int cores : core_counts) {
+      std::map<std::string, Summary> speed, draught, load_cell;
+      std::vector<double> draught_diff, load_diff;  // per seed, liggghts - builtin (same soil)
       for (const std::string backend : {"builtin", "liggghts"}) {
-        std::vector<double> draught, rate;
+        std::vector<double> d, rate, lc;
         for (const auto& r : runs)
           if (r.backend == backend && r.cores == cores) {
-            draught.push_back(r.draught_N);
+            d.push_back(r.draught_N);
             rate.push_back(r.particleStepsPerSecond());
+            lc.push_back(r.load_cell_N);
           }
-        const Summary d = summarise(draught), v = summarise(rate);
-        speed[backend == "builtin" ? 0 : 1] = v.mean;
-        std::printf("%-9s %d core(s), %d seeds: %.3e +- %.1e particle-steps/s, draught %.4f +- %.4f N\n",
-                    backend.c_str(), cores, seeds, v.mean, v.stddev, d.mean, d.stddev);
-        summary[backend + "_" + std::to_string(cores) + "_cores"] = {{"particle_steps_per_s_mean", v.mean},
-                                                                   {"particle_steps_per_s_stddev", v.stddev},
-                                                                   {"draught_mean_N", d.mean},
-                                                                   {"draught_stddev_N", d.stddev}};
+        speed[backend] = summarise(rate), draught[backend] = summarise(d), load_cell[backend] = summarise(lc);
+        if (text)
+          std::printf("%-9s %d core(s), %d seeds: %.3e +- %.1e particle-steps/s, draught %.4f +- %.4f N, load cell "
+                      "%.4f +- %.4f N\n",
+                      backend.c_str(), cores, seeds, speed[backend].mean, speed[backend].stddev, draught[backend].mean,
+                      draught[backend].stddev, load_cell[backend].mean, load_cell[backend].stddev);
+        summary[backend + "_" + std::to_string(cores) + "_cores"] = {
+            {"particle_steps_per_s_mean", speed[backend].mean}, {"particle_steps_per_s_stddev", speed[backend].stddev},
+            {"draught_mean_N", draught[backend].mean},          {"draught_stddev_N", draught[backend].stddev},
+            {"load_cell_mean_N", load_cell[backend].mean},      {"load_cell_stddev_N", load_cell[backend].stddev}};
       }
-      std::printf("speed ratio liggghts / builtin on %d core(s): %.3f\n", cores, speed[1] / speed[0]);
-      summary["speed_ratio_liggghts_over_builtin_" + std::to_string(cores) + "_cores"] = speed[1] / speed[0];
+      const auto compare = [&](const char* name, std::map<std::string, Summary>& m) {
+        const double diff = m["liggghts"].mean - m["builtin"].mean;
+        const double n = static_cast<double>(seeds);
+        const double se = std::sqrt((m["liggghts"].stddev * m["liggghts"].stddev + m["builtin"].stddev * m["builtin"].stddev) / n);
+        const double relative = diff / (0.5 * (m["liggghts"].mean + m["builtin"].mean));
+        if (text)
+          std::printf("%s, %d core(s): liggghts - builtin = %.4f N (%.1f %% of their mean), %.2f standard errors of "
+                      "the difference (seed scatter)\n",
+                      name, cores, diff, 100 * relative, diff / se);
+        return nlohmann::json{{"difference_N", diff}, {"relative_difference", relative},
+                              {"standard_error_N", se}, {"difference_in_standard_errors", diff / se}};
+      };
+      nlohmann::json c{{"draught", compare("draught", draught)}};
+      if (g_coupled) c["load_cell"] = compare("load cell", load_cell);
+      summary["liggghts_minus_builtin_" + std::to_string(cores) + "_cores"] = c;
+      const double ratio = speed["liggghts"].mean / speed["builtin"].mean;
+      if (text) std::printf("speed ratio liggghts / builtin on %d core(s): %.3f\n", cores, ratio);
+      summary["speed_ratio_liggghts_over_builtin_" + std::to_string(cores) + "_cores"] = ratio;
     }
     nlohmann::json all = nlohmann::json::array();
     for (const auto& r : runs) all.push_back(toJson(r));
+    const auto s1 = seededStudy(file, 1, 1);
     cli::writeJson(json_target, {{"study", file},
+                                 {"coupled", g_coupled},
+                                 {"fem_steps", g_fem_steps},
                                  {"window_s", window_s},
                                  {"interval_s", g_interval_s},
-                                 {"settle_kinetic_energy_J", benchStudy(file, 1, 1).soil.settle_kinetic_energy_J},
-                                 {"liggghts_on_builtin_soil", g_liggghts_on_builtin_soil},
+                                 {"settle_kinetic_energy_J", s1.soil.settle_kinetic_energy_J},
+                                 {"deposition_backend", study::depositionBackendName(s1.soil.deposition_backend)},
                                  {"runs", all},
                                  {"summary", summary}});
   });

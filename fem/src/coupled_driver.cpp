@@ -359,6 +359,7 @@ struct CoupledDriver::Impl {
                                : "keypoint_displacements.f64: little-endian float64 records [t_s, u_m(3 x keypoint_count, keypoints.csv order)]"},
                        {"complete", reason.empty()}};
     if (!reason.empty()) doc["incomplete_reason"] = reason;
+    if (!info_.soil_json.empty()) doc["soil"] = nlohmann::json::parse(info_.soil_json);  // the DEM's settled soil
     adapter::writeFileAtomically(options_.output_dir / "sensors.json",
                                  doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + '\n');
   }

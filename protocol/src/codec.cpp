@@ -244,6 +244,11 @@ void encodeBody(const HelloReply& r, json& h, Multipart&) {
   h["backend"] = r.backend;
   h["backend_version"] = r.backend_version;
   h["dem_time_step_s"] = r.dem_time_step_s;
+  if (!r.soil_json.empty()) {
+    json soil = json::parse(r.soil_json, nullptr, false);
+    if (!soil.is_object()) bad("hello reply: soil must be the text of a JSON object");
+    h["soil"] = std::move(soil);
+  }
 }
 void encodeBody(const GeometriesReply& r, json& h, Multipart& m) {
   json list = json::array();
@@ -267,8 +272,13 @@ ReplyBody decodeReplyBody(const std::string& op, const json& h, const Multipart&
     case ReplyKind::Hello: {
       expectFrames(m, 1, op);
       const double dt = numberField(h, "dem_time_step_s");
+      std::string soil;
+      if (h.contains("soil")) {
+        if (!h["soil"].is_object()) bad("header field 'soil' must be an object");
+        soil = h["soil"].dump();
+      }
       return HelloReply{int32Field(h, "protocol_version"), stringField(h, "backend"),
-                        stringField(h, "backend_version"), dt};
+                        stringField(h, "backend_version"), dt, std::move(soil)};
     }
     case ReplyKind::Geometries: {
       const json& list = field(h, "geometries");

@@ -30,6 +30,8 @@ inline const NameTable<RollingModel> kRollingModels{{"none", RollingModel::None}
                                                     {"edem-standard", RollingModel::EdemStandard},
                                                     {"cdt", RollingModel::Cdt},
                                                     {"epsd", RollingModel::Epsd}};
+inline const NameTable<DepositionBackend> kDepositionBackends{{"builtin", DepositionBackend::Builtin},
+                                                              {"liggghts", DepositionBackend::Liggghts}};
 inline const NameTable<GeometryKind> kGeometryKinds{{"plate", GeometryKind::Plate},
                                                     {"gmsh", GeometryKind::Gmsh},
                                                     {"matrix-market", GeometryKind::MatrixMarket},

@@ -196,6 +196,7 @@ class StudyParser {
     if (auto v = deposition.integer("seed", 0, Need::Optional)) soil.deposition_seed = static_cast<std::uint64_t>(*v);
     if (auto v = deposition.quantity("settle_kinetic_energy_J", positive(), Need::Optional))
       soil.settle_kinetic_energy_J = *v;
+    if (auto v = deposition.choice("backend", detail::kDepositionBackends, Need::Optional)) soil.deposition_backend = *v;
     deposition.finish();
     o.finish();
   }
@@ -657,9 +658,10 @@ class StudyParser {
     }
   }
 
-  // The LIGGGHTS backend offers only its own contact laws (docs/architecture.md section 11).
+  // The LIGGGHTS backend offers only its own contact laws (docs/architecture.md section 11), also
+  // when it only deposits the soil.
   void checkBackendModels() {
-    if (study_.dem.backend != "liggghts") return;
+    if (study_.dem.backend != "liggghts" && study_.soil.deposition_backend != DepositionBackend::Liggghts) return;
     const ContactModel& c = study_.soil.contact;
     if (normal_ == NormalModel::EdemHysteretic)
       issues_.add("/soil/contact/normal", "\"edem-hysteretic\" is not available in the liggghts backend; use "

@@ -87,6 +87,7 @@ ordered_json soilJson(const Soil& soil) {
   }
   out["deposition"]["seed"] = soil.deposition_seed;
   put(out["deposition"], "settle_kinetic_energy_J", soil.settle_kinetic_energy_J);
+  out["deposition"]["backend"] = nameOf(detail::kDepositionBackends, soil.deposition_backend);
   return out;
 }
 
@@ -270,11 +271,13 @@ std::string soilHash(const Study& study) {
   std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) { return a["materials"] < b["materials"]; });
   interactions = kept;
   nlohmann::json dem = nlohmann::json::parse(demJson(study.dem).dump());
-  dem.erase("seed");  // the run's seed; the deposition has soil.deposition.seed
+  dem.erase("seed");     // the run's seed; the deposition has soil.deposition.seed
+  dem.erase("threads");  // one soil for every core count
+  dem.erase("backend");  // the run's backend; the deposition's is soil.deposition.backend
   canonical["dem"] = dem;
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx",
-                static_cast<unsigned long long>(fnv1a64("demfem-soil-v1\n" + canonical.dump())));
+                static_cast<unsigned long long>(fnv1a64("demfem-soil-v2\n" + canonical.dump())));
   return hex;
 }
 

@@ -1,5 +1,7 @@
 #include "demfem/study/study.hpp"
 
+#include "enum_names.hpp"
+
 #include <sstream>
 
 namespace demfem::study {
@@ -31,6 +33,16 @@ const Interaction& Study::interaction(const std::string& a, const std::string& b
     if ((i.a == a && i.b == b) || (i.a == b && i.b == a)) return i;
   throw std::out_of_range("study " + name + ": no interaction for (\"" + a + "\", \"" + b +
                           "\") in /soil/interactions");
+}
+
+const std::string& depositionBackendName(DepositionBackend backend) {
+  return detail::nameOf(detail::kDepositionBackends, backend);
+}
+
+DepositionBackend parseDepositionBackend(const std::string& name) {
+  for (const auto& [word, value] : detail::kDepositionBackends)
+    if (word == name) return value;
+  throw std::invalid_argument("unknown deposition backend \"" + name + "\" (builtin or liggghts)");
 }
 
 }  // namespace demfem::study

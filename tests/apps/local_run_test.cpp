@@ -1,7 +1,11 @@
 // `demfem run`: the two-process local run over ipc://, with the harmonic test backend.
+#include "demfem/adapter/settled_soil.hpp"
+#include "demfem/study/study.hpp"
 #include "process.hpp"
 
 #include <catch2/catch.hpp>
+
+#include <cstdlib>
 
 using namespace demfem::testing;
 
@@ -46,5 +50,57 @@ TEST_CASE("Ctrl-C on demfem run stops both processes and marks the outputs incom
   CHECK(nlohmann::json::parse(readText(dir / "out" / "sensors.json"))["complete"] == false);
   // Its temporary directory (the ipc socket) is gone too, although the signal skipped destructors.
   CHECK_FALSE(fs::exists(fs::temp_directory_path() / ("demfem-run-" + std::to_string(run.pid()))));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("an unsettled soil stops demfem run and demfem-dem unless allowed, and its figures go into sensors.json",
+          "[apps][soil]") {
+  const fs::path dir = freshDir("unsettled-soil");
+  const fs::path study_file = fastQuickStudy(dir);
+  const fs::path soil_dir = dir / "soil";
+  ::setenv("DEMFEM_SOIL_DIR", soil_dir.c_str(), 1);  // inherited by the processes below
+  const auto study = demfem::study::loadStudy(study_file);
+  // A soil whose deposition hit its time cap in 3 of 5 stages: a few grains resting on the floor,
+  // away from the tool's path.
+  demfem::adapter::SettledSoil soil;
+  soil.soil_hash = demfem::study::soilHash(study);
+  soil.seed = study.soil.deposition_seed;
+  soil.settling = {2.5e-6, study.soil.settle_kinetic_energy_J, 5, 3, 7.5, 0.0, 0.0};
+  const auto deepest = static_cast<std::int32_t>(study.soil.layers.size()) - 1;
+  for (int i = 0; i < 6; ++i)
+    soil.particles.push_back({{0.02 + 0.012 * i, study.soil.diameter_max_m / 2, 0.02}, study.soil.diameter_max_m / 2, deepest});
+  const fs::path soil_file = demfem::adapter::settledSoilFile(study, soil_dir);
+  demfem::adapter::writeSettledSoil(soil_file, soil);
+
+  Process refused({app("demfem"), "run", study_file.string(), "--backend", "builtin", "--steps", "5", "--output",
+                   (dir / "refused").string()},
+                  dir / "refused-run");
+  CHECK(WIFEXITED(refused.wait(120s)));
+  CHECK_THAT(refused.err(), Catch::Contains(soil_file.string()) && Catch::Contains("is not settled") &&
+                                Catch::Contains("3 of 5 settling stages") && Catch::Contains("--allow-unsettled-soil"));
+  CHECK_FALSE(fs::exists(dir / "refused" / "sensors.json"));
+
+  Process server({app("demfem-dem"), "--study", study_file.string(), "--backend", "builtin", "--bind",
+                  "ipc://" + (dir / "dem.ipc").string()},
+                 dir / "refused-dem");
+  const int server_status = server.wait(120s);
+  CHECK((WIFEXITED(server_status) && WEXITSTATUS(server_status) != 0));
+  CHECK_THAT(server.err(), Catch::Contains("is not settled"));
+
+  Process allowed({app("demfem"), "run", study_file.string(), "--backend", "builtin", "--steps", "5", "--output",
+                   (dir / "out").string(), "--allow-unsettled-soil", "--quiet"},
+                  dir / "allowed-run");
+  const int status = allowed.wait(240s);
+  INFO(allowed.err());
+  REQUIRE(exitedOk(status));
+  const auto record = nlohmann::json::parse(readText(dir / "out" / "sensors.json")).at("soil");
+  CHECK(record.at("settled") == false);
+  CHECK(record.at("stages_capped") == 3);
+  CHECK(record.at("stages") == 5);
+  CHECK(record.at("kinetic_energy_J") == 2.5e-6);
+  CHECK(record.at("particles") == soil.particles.size());
+  CHECK(record.at("file") == soil_file.string());
+  CHECK(record.at("file_checksum") == demfem::adapter::settledSoilChecksum(soil_file));
+  CHECK(record.at("deposition_backend") == "builtin");
   fs::remove_all(dir);
 }

@@ -30,7 +30,8 @@ inline std::vector<Request> requests() {
 
 inline std::vector<Reply> replies() {
   return {
-      {1, "hello", HelloReply{kProtocolVersion, "harmonic", "analytic-1", 1e-5}},
+      {1, "hello", HelloReply{kProtocolVersion, "harmonic", "analytic-1", 1e-5, ""}},
+      {1, "hello", HelloReply{kProtocolVersion, "builtin", "0.1", 9e-5, R"({"particles":1455,"settled":true})"}},
       {2, "list_geometries",
        GeometriesReply{{{"tool", 4, {{0, 1, 2}, {0, 2, 3}}}, {"empty", 0, {}}}}},
       {3, "get_time", TimeReply{0.123456789012345678}},

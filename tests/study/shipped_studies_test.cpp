@@ -187,9 +187,15 @@ TEST_CASE("the soil hash is stable and depends on the soil only", "[study]") {
   wall["soil"]["materials"][4]["E_Pa"] = 2.05e11;  // steel: the bin
   CHECK(hashOf(wall) != reference);
   nlohmann::json threads = doc;
-  // Not this machine's core count, the default: results are reproducible per thread count only.
-  threads["dem"]["threads"] = static_cast<int>(std::thread::hardware_concurrency()) + 1;
-  CHECK(hashOf(threads) != reference);
+  threads["dem"]["threads"] = 2;  // one soil for every core count
+  CHECK(hashOf(threads) == reference);
+  // Both backends run the same soil; another deposition backend makes another soil.
+  const nlohmann::json quick = readJson(kStudies / "quick_liggghts.json");
+  nlohmann::json run_backend = quick, deposition_backend = quick;
+  run_backend["dem"]["backend"] = run_backend["dem"]["backend"] == "liggghts" ? "builtin" : "liggghts";
+  deposition_backend["soil"]["deposition"]["backend"] = "liggghts";
+  CHECK(hashOf(run_backend) == hashOf(quick));
+  CHECK(hashOf(deposition_backend) != hashOf(quick));
   CHECK(soilHash(load("cpt_unlayered.json")) != reference);
   CHECK_THROWS_AS(soilHash(load("weight_drop_1kg.json")), std::invalid_argument);
 }

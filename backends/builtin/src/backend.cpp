@@ -24,8 +24,8 @@ constexpr char kCheckpointMagic[8] = {'D', 'F', 'B', 'K', 'E', 'N', 'D', '1'};
 
 class BuiltinBackend final : public adapter::CouplingApi {
  public:
-  BuiltinBackend(const study::Study& study, const SettledSoil& soil)
-      : study_(study), sim_(study.soil, binDomain(study.soil), study.dem.threads) {
+  BuiltinBackend(const study::Study& study, const adapter::SettledSoil& soil, std::string soil_record)
+      : study_(study), sim_(study.soil, binDomain(study.soil), study.dem.threads), soil_record_(std::move(soil_record)) {
     addBinWalls(sim_, study.soil);
     addSettledParticles(sim_, study.soil, soil);
     for (const auto& tool : study.tools) {
@@ -48,7 +48,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
 
   adapter::BackendInfo info() override {
     alive();
-    return {"builtin", "0.1", 1, sim_.timeStep()};
+    return {"builtin", "0.1", 1, sim_.timeStep(), soil_record_};
   }
 
   std::vector<adapter::GeometryInfo> geometries() override {
@@ -246,6 +246,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
 
   study::Study study_;
   DemSimulation sim_;
+  std::string soil_record_;  // adapter::soilRecordJson() of the soil it started from
   std::map<std::string, int> meshes_;
   std::map<int, adapter::NodeArray> interval_mean_;
   double last_positions_time_ = 0;
@@ -273,16 +274,19 @@ TriangleMesh toolMesh(const study::Tool& tool) {
 
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress) {
   try {
-    const auto file = soilFile(study, defaultSoilDirectory());
-    SettledSoil soil;
-    if (std::filesystem::exists(file)) {
-      soil = readSettledSoil(file);
-    } else {
+    const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+    if (!std::filesystem::exists(file)) {
+      if (study.soil.deposition_backend != study::DepositionBackend::Builtin)
+        throw CouplingError(ErrorCode::BadRequest,
+                            "builtin DEM: no settled soil " + file.string() + "; the study deposits it with " +
+                                study::depositionBackendName(study.soil.deposition_backend) +
+                                " (/soil/deposition/backend): run `demfem deposit` on the study first");
       DepositReport report;
-      soil = depositSoil(study, study.dem.threads, report, deposit_progress);
-      writeSettledSoil(file, soil);
+      adapter::writeSettledSoil(file, depositSoil(study, study.dem.threads, report, deposit_progress));
     }
-    return std::make_unique<BuiltinBackend>(study, soil);
+    const adapter::SettledSoil soil = adapter::readSettledSoil(file, study);
+    return std::make_unique<BuiltinBackend>(study, soil,
+                                            adapter::soilRecordJson(soil, file, adapter::settledSoilChecksum(file)));
   } catch (const CouplingError&) {
     throw;
   } catch (const BlowUp& e) {

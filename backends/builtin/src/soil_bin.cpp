@@ -15,7 +15,6 @@
 namespace demfem::builtin {
 
 namespace {
-constexpr char kSoilMagic[8] = {'D', 'F', 'S', 'O', 'I', 'L', '0', '1'};
 constexpr double kSettledPacking = 0.60;     // solid fraction assumed to size each stage's batch
 constexpr double kLatticeGap = 1.10;          // insertion lattice spacing / d_max
 constexpr double kStageTimeCap_s = 1.5;       // simulated settling time cap per stage
@@ -66,7 +65,7 @@ std::size_t estimatedParticleCount(const study::Soil& soil) {
       std::llround(kSettledPacking * soil.bin_width_m * soil.bin_length_m * soil.fill_height_m / meanParticleVolume(soil)));
 }
 
-SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress) {
+adapter::SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress) {
   const auto& soil = study.soil;
   if (soil.layers.empty()) throw std::invalid_argument("builtin DEM: /soil/layers is empty");
   DemSimulation sim(soil, binDomain(soil), threads);
@@ -88,6 +87,9 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
 
   // Progress: the deposition stages and the final settling, each counted by its time cap.
   const double stages = static_cast<double>(stage_tops.size() + 1);
+  adapter::SettledSoil out;
+  out.settling.threshold_J = soil.settle_kinetic_energy_J;
+  out.settling.stages = static_cast<std::int32_t>(stage_tops.size()) + 1;
   double filled = 0;  // height filled so far
   bool dt_set = false;
   for (std::size_t s = 0; s < stage_tops.size(); ++s) {
@@ -133,7 +135,7 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
         break;
       }
     }
-    report.settled = report.settled && settled;
+    if (!settled) ++out.settling.stages_capped;
     filled = stage_tops[s];
     if (progress) {
       std::ostringstream line;
@@ -161,90 +163,36 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
       break;
     }
   }
-  report.settled = report.settled && settled;
+  if (!settled) ++out.settling.stages_capped;
+  if (progress)
+    progress(1.0, std::string("final settling: kinetic energy ") + std::to_string(sim.kineticEnergy()) + " J after " +
+                      std::to_string(sim.time() - start) + " s" + (settled ? "" : " (time cap reached before the energy threshold)"));
 
-  SettledSoil out;
   out.soil_hash = study::soilHash(study);
+  out.backend = study::DepositionBackend::Builtin;
+  out.seed = soil.deposition_seed;
+  out.cores = threads;
   for (std::size_t i = 0; i < sim.particleCount(); ++i) {
     const auto p = sim.particle(i);
     out.particles.push_back({p.x, p.radius, p.layer});
-    report.surface_height_m = std::max(report.surface_height_m, p.x[1] + p.radius);
   }
-  report.particles = sim.particleCount();
-  report.simulated_s = sim.time();
+  out.settling.kinetic_energy_J = sim.kineticEnergy();
+  out.settling.simulated_s = sim.time();
+  out.settling.surface_height_m = adapter::soilSurfaceHeight(out.particles, soil.diameter_max_m);
+  out.settling.packing_fraction = adapter::packingFraction(out.particles, soil);
   report.steps = sim.stepCount();
   report.time_step_s = sim.timeStep();
-  report.final_kinetic_energy_J = sim.kineticEnergy();
   return out;
 }
 
-void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil) {
-  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
-  const auto tmp = file.string() + ".part";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw std::runtime_error(file.string() + ": cannot write settled-soil file");
-    out.write(kSoilMagic, sizeof(kSoilMagic));
-    const std::uint32_t hash_len = static_cast<std::uint32_t>(soil.soil_hash.size());
-    out.write(reinterpret_cast<const char*>(&hash_len), 4);
-    out.write(soil.soil_hash.data(), hash_len);
-    const std::uint64_t n = soil.particles.size();
-    out.write(reinterpret_cast<const char*>(&n), 8);
-    for (const auto& p : soil.particles) {
-      out.write(reinterpret_cast<const char*>(p.x.data()), 24);
-      out.write(reinterpret_cast<const char*>(&p.radius), 8);
-      const std::int32_t layer = p.layer;
-      out.write(reinterpret_cast<const char*>(&layer), 4);
-    }
-    if (!out) throw std::runtime_error(file.string() + ": write failed");
-  }
-  std::filesystem::rename(tmp, file);
-}
-
-SettledSoil readSettledSoil(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error(file.string() + ": cannot open settled-soil file");
-  char magic[8];
-  in.read(magic, 8);
-  if (!in || std::memcmp(magic, kSoilMagic, 8) != 0) throw std::runtime_error(file.string() + ": not a settled-soil file");
-  SettledSoil soil;
-  std::uint32_t hash_len = 0;
-  in.read(reinterpret_cast<char*>(&hash_len), 4);
-  if (!in || hash_len > 4096) throw std::runtime_error(file.string() + ": corrupt settled-soil header");
-  soil.soil_hash.resize(hash_len);
-  in.read(soil.soil_hash.data(), hash_len);
-  std::uint64_t n = 0;
-  in.read(reinterpret_cast<char*>(&n), 8);
-  if (!in || n > 100'000'000) throw std::runtime_error(file.string() + ": corrupt particle count");
-  soil.particles.resize(n);
-  for (auto& p : soil.particles) {
-    std::int32_t layer = 0;
-    in.read(reinterpret_cast<char*>(p.x.data()), 24);
-    in.read(reinterpret_cast<char*>(&p.radius), 8);
-    in.read(reinterpret_cast<char*>(&layer), 4);
-    p.layer = layer;
-  }
-  if (!in) throw std::runtime_error(file.string() + ": truncated settled-soil file (" + std::to_string(n) + " particles expected)");
-  return soil;
-}
-
-std::filesystem::path soilFile(const study::Study& study, const std::filesystem::path& dir) {
-  return dir / ("soil-" + study::soilHash(study) + ".bin");
-}
-
-std::filesystem::path defaultSoilDirectory() {
-  if (const char* env = std::getenv("DEMFEM_SOIL_DIR"); env && *env) return env;
-  return "soil";
-}
-
-void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const SettledSoil& settled) {
+void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled) {
   // Added in spatial order (cells one diameter wide; x fastest, then y, then z along the bin): a
   // particle's neighbours are then within a slab of about 200 indices instead of a deposition
   // lattice layer (about 1,300 in the paper bin), so the pair loop's working set stays in L1/L2.
   const double cell = soil.diameter_max_m;
-  const auto key = [cell](const SettledParticle& p) {
-    return std::array<long, 3>{std::lround(std::floor(p.x[2] / cell)), std::lround(std::floor(p.x[1] / cell)),
-                               std::lround(std::floor(p.x[0] / cell))};
+  const auto key = [cell](const adapter::SoilParticle& p) {
+    return std::array<long, 3>{std::lround(std::floor(p.x_m[2] / cell)), std::lround(std::floor(p.x_m[1] / cell)),
+                               std::lround(std::floor(p.x_m[0] / cell))};
   };
   std::vector<std::size_t> order(settled.particles.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -255,8 +203,8 @@ void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const Sett
     if (p.layer < 0 || p.layer >= static_cast<int>(soil.layers.size()))
       throw std::runtime_error("settled soil: layer " + std::to_string(p.layer) + " not in /soil/layers");
     ParticleState s;
-    s.x = p.x;
-    s.radius = p.radius;
+    s.x = p.x_m;
+    s.radius = p.radius_m;
     s.layer = p.layer;
     s.material = sim.materials().index(soil.layers[p.layer].material);
     sim.addParticle(s);

@@ -2,6 +2,7 @@
 // LIGGGHTS and MPI headers stay in this file (pimpl): nothing of them leaks into our headers.
 #include "demfem/backends/liggghts/backend.hpp"
 
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/liggghts/input_deck.hpp"
 
 #include <mpi.h>
@@ -212,51 +213,6 @@ class Instance {
 constexpr std::size_t kParticleValues = 5;
 using SettledParticles = std::vector<double>;
 
-// Settled-soil file: "DFLSOIL1", the 16 hex digits of study::soilHash, the particle count (uint64),
-// then kParticleValues float64 per particle; native byte order (little endian on the platforms
-// Debian builds LIGGGHTS for).
-constexpr char kSoilMagic[8] = {'D', 'F', 'L', 'S', 'O', 'I', 'L', '1'};
-
-void writeSoilFile(const std::filesystem::path& file, const std::string& hash, const SettledParticles& particles) {
-  std::filesystem::create_directories(file.parent_path());
-  // Written under a unique name and renamed: a concurrent run never reads half a file.
-  const std::filesystem::path partial = file.string() + "." + std::to_string(::getpid()) + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary);
-    const std::uint64_t count = particles.size() / kParticleValues;
-    out.write(kSoilMagic, sizeof kSoilMagic);
-    out.write(hash.data(), static_cast<std::streamsize>(hash.size()));
-    out.write(reinterpret_cast<const char*>(&count), sizeof count);
-    out.write(reinterpret_cast<const char*>(particles.data()), static_cast<std::streamsize>(particles.size() * sizeof(double)));
-    if (!out) throw CouplingError(ErrorCode::Internal, "cannot write the settled soil file " + partial.string());
-  }
-  std::filesystem::rename(partial, file);
-}
-
-SettledParticles readSoilFile(const std::filesystem::path& file, const std::string& hash) {
-  std::ifstream in(file, std::ios::binary);
-  char magic[sizeof kSoilMagic];
-  std::string stored_hash(hash.size(), ' ');
-  std::uint64_t count = 0;
-  in.read(magic, sizeof magic);
-  in.read(stored_hash.data(), static_cast<std::streamsize>(stored_hash.size()));
-  in.read(reinterpret_cast<char*>(&count), sizeof count);
-  const auto fail = [&file](const std::string& what) {
-    return CouplingError(ErrorCode::BadRequest, "settled soil file " + file.string() + ": " + what +
-                                                    "; delete it to deposit the soil again");
-  };
-  if (!in || !std::equal(magic, magic + sizeof magic, kSoilMagic)) throw fail("not a liggghts settled-soil file");
-  if (stored_hash != hash) throw fail("soil hash " + stored_hash + ", the study's is " + hash);
-  const auto expected_bytes = std::filesystem::file_size(file);
-  const auto header_bytes = sizeof kSoilMagic + hash.size() + sizeof count;
-  if (count == 0 || expected_bytes != header_bytes + count * kParticleValues * sizeof(double))
-    throw fail("truncated or damaged (" + std::to_string(count) + " particles announced)");
-  SettledParticles particles(count * kParticleValues);
-  in.read(reinterpret_cast<char*>(particles.data()), static_cast<std::streamsize>(particles.size() * sizeof(double)));
-  if (!in) throw fail("truncated");
-  return particles;
-}
-
 // All particles of an instance, gathered on every rank and ordered by LIGGGHTS id.
 SettledParticles gatherParticles(LAMMPS_NS::LAMMPS* lmp) {
   const LAMMPS_NS::Atom* atom = lmp->atom;
@@ -285,17 +241,99 @@ SettledParticles gatherParticles(LAMMPS_NS::LAMMPS* lmp) {
   return particles;
 }
 
-// Part of the settled-soil file name: raise it whenever the deposition (input_deck.cpp) changes what
-// it produces, so that soils of an earlier deposition are no longer found (they stay on disk).
-constexpr int kDepositionVersion = 2;
-
 // Rank 0's status of reading the soil file, broadcast so that every rank takes the same branch.
 enum class SoilFileStatus : int { Missing = 0, Loaded = 1, Damaged = 2 };
 
 std::filesystem::path soilDirectory(const BackendOptions& options) {
-  if (!options.soil_directory.empty()) return options.soil_directory;
-  if (const char* dir = std::getenv("DEMFEM_SOIL_DIR"); dir && *dir) return dir;
-  return "soil";
+  return options.soil_directory.empty() ? adapter::defaultSoilDirectory() : options.soil_directory;
+}
+
+int worldSize() {
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  return size;
+}
+
+// The layer of a particle LIGGGHTS deposited with atom `type` at height y: the layer covering y if
+// it is of the particle's material, else the nearest layer (in depth) of that material.
+std::int32_t layerOfDeposited(const study::Study& study, int type, double y) {
+  const auto& layers = study.soil.layers;
+  const double depth = study.soil.fill_height_m - y;
+  std::int32_t best = -1;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    if (atomType(study, layers[l].material) != type) continue;
+    const double distance = std::max({0.0, layers[l].top_depth_m - depth, depth - layers[l].bottom_depth_m});
+    if (distance < best_distance) best_distance = distance, best = static_cast<std::int32_t>(l);
+  }
+  if (best < 0) throw CouplingError(ErrorCode::Internal, "deposited particle of atom type " + std::to_string(type) +
+                                                             " matches no layer material");
+  return best;
+}
+
+adapter::SettledSoil toNeutral(const study::Study& study, const SettledParticles& particles) {
+  adapter::SettledSoil soil;
+  for (std::size_t i = 0; i < particles.size(); i += kParticleValues)
+    soil.particles.push_back({{particles[i], particles[i + 1], particles[i + 2]},
+                              particles[i + 3],
+                              layerOfDeposited(study, static_cast<int>(particles[i + 4]), particles[i + 1])});
+  return soil;
+}
+
+SettledParticles fromNeutral(const study::Study& study, const adapter::SettledSoil& soil) {
+  SettledParticles particles;
+  particles.reserve(soil.particles.size() * kParticleValues);
+  for (const auto& p : soil.particles)
+    particles.insert(particles.end(), {p.x_m[0], p.x_m[1], p.x_m[2], p.radius_m,
+                                       static_cast<double>(atomType(study, study.soil.layers[static_cast<std::size_t>(p.layer)].material))});
+  return particles;
+}
+
+// Inserts the layers (deck.deposition) in an instance of its own and lets them settle under gravity
+// until the translational kinetic energy is below soil.settle_kinetic_energy_J (checked every
+// kSettleCheck_s, after twice the fall time, for at most kSettleLimit_s more: then the soil is
+// reported as capped, not settled), then removes the particles above the fill height (deck.trim).
+// Rotational energy is not part of the criterion: a spin about the contact normal is resisted by
+// none of LIGGGHTS' laws here (no torsional friction), so a particle can keep drilling in place while
+// the packing is at rest; the saved state has no spin. Collective.
+adapter::SettledSoil depositInInstance(const study::Study& study, const InputDeck& deck,
+                                       const std::filesystem::path& work_dir) {
+  Instance deposition(work_dir, "deposition");
+  for (const auto& line : deck.setup) deposition.command(line);
+  deposition.command("fix integrate all nve/sphere");
+  for (const auto& line : deck.deposition) deposition.command(line);
+  const double dt = deck.time_step_s;
+  const auto chunk = std::max<long long>(1, std::llround(kSettleCheck_s / dt));
+  const double fall_time = 2 * std::sqrt(2 * deck.insertion_top_m / kGravity);
+  double t = 0, energy = 0;
+  bool capped = false;
+  while (true) {
+    deposition.command("run " + std::to_string(chunk) + " post no");
+    t += static_cast<double>(chunk) * dt;
+    energy = deposition.computeScalar("kinetic_energy");
+    if (!std::isfinite(energy))
+      throw CouplingError(ErrorCode::SimulationFailed, "deposition diverged (kinetic energy is not finite); "
+                                                       "reduce dem.dt_fraction or dem.dt_s");
+    if (t >= fall_time && energy < study.soil.settle_kinetic_energy_J) break;
+    if (t > fall_time + kSettleLimit_s) {
+      capped = true;
+      break;
+    }
+  }
+  for (const auto& line : deck.trim) deposition.command(line);
+  adapter::SettledSoil soil = toNeutral(study, gatherParticles(deposition.get()));
+  soil.soil_hash = study::soilHash(study);
+  soil.backend = study::DepositionBackend::Liggghts;
+  soil.seed = study.soil.deposition_seed;
+  soil.cores = worldSize();
+  soil.settling.kinetic_energy_J = energy;
+  soil.settling.threshold_J = study.soil.settle_kinetic_energy_J;
+  soil.settling.stages = 1;
+  soil.settling.stages_capped = capped ? 1 : 0;
+  soil.settling.simulated_s = t;
+  soil.settling.surface_height_m = adapter::soilSurfaceHeight(soil.particles, study.soil.diameter_max_m);
+  soil.settling.packing_fraction = adapter::packingFraction(soil.particles, study.soil);
+  return soil;
 }
 
 struct ToolState {
@@ -411,6 +449,7 @@ class Engine {
   std::int64_t particleCount() const { return static_cast<std::int64_t>(lmp_->atom->natoms); }
   SettledParticles particles() const { return gatherParticles(lmp_); }
   SoilOrigin soilOrigin() const { return {soil_file_, soil_deposited_}; }
+  const std::string& soilRecord() const { return soil_record_; }
 
   void setNodePositions(std::size_t g, const NodeArray& xyz) {
     auto& tool = tools_[g];
@@ -521,20 +560,19 @@ class Engine {
             exact(density));
   }
 
-  // The settled soil of the study: read from soilDirectory()/liggghts-soil-<soilHash>-v<version>.bin if there,
-  // else deposited in a LIGGGHTS instance of its own and saved there (rank 0 reads and writes).
+  // The settled soil of the study: read from adapter::settledSoilFile() in soilDirectory() (rank 0
+  // reads and broadcasts), or, when the file is missing and the study deposits with LIGGGHTS,
+  // deposited in an instance of its own and written there (rank 0 writes).
   SettledParticles settledSoil(const study::Study& study, const InputDeck& deck, const BackendOptions& options) {
-    const std::string hash = study::soilHash(study);
-    soil_file_ = soilDirectory(options) /
-                 ("liggghts-soil-" + hash + "-v" + std::to_string(kDepositionVersion) + ".bin");
-    SettledParticles particles;
+    soil_file_ = adapter::settledSoilFile(study, soilDirectory(options));
+    adapter::SettledSoil soil;
     int status = static_cast<int>(SoilFileStatus::Missing);
     std::string problem;
     if (worldRank() == 0 && std::filesystem::exists(soil_file_)) {
       try {
-        particles = readSoilFile(soil_file_, hash);
+        soil = adapter::readSettledSoil(soil_file_, study);
         status = static_cast<int>(SoilFileStatus::Loaded);
-      } catch (const CouplingError& e) {
+      } catch (const std::exception& e) {
         status = static_cast<int>(SoilFileStatus::Damaged);
         problem = e.what();
       }
@@ -544,15 +582,15 @@ class Engine {
       throw CouplingError(ErrorCode::BadRequest, worldRank() == 0 ? problem : "rank 0 cannot read " + soil_file_.string());
     soil_deposited_ = status == static_cast<int>(SoilFileStatus::Missing);
     if (soil_deposited_) {
-      Instance deposition(work_dir_, "deposition");
-      for (const auto& line : deck.setup) deposition.command(line);
-      deposition.command("fix integrate all nve/sphere");
-      deposit(deposition, study, deck);
-      for (const auto& line : deck.trim) deposition.command(line);
-      particles = gatherParticles(deposition.get());
+      if (study.soil.deposition_backend != study::DepositionBackend::Liggghts)
+        throw CouplingError(ErrorCode::BadRequest,
+                            "liggghts backend: no settled soil " + soil_file_.string() + "; the study deposits it with " +
+                                study::depositionBackendName(study.soil.deposition_backend) +
+                                " (/soil/deposition/backend): run `demfem deposit` on the study first");
+      soil = depositInInstance(study, deck, work_dir_);
       int written = 1;
       if (worldRank() == 0) try {
-          writeSoilFile(soil_file_, hash, particles);
+          adapter::writeSettledSoil(soil_file_, soil);
         } catch (const std::exception& e) {
           written = 0;
           problem = e.what();
@@ -560,7 +598,11 @@ class Engine {
       MPI_Bcast(&written, 1, MPI_INT, 0, MPI_COMM_WORLD);  // every rank fails alike, none waits forever
       if (!written)
         throw CouplingError(ErrorCode::Internal, worldRank() == 0 ? problem : "rank 0 cannot write " + soil_file_.string());
-      return particles;
+    }
+    SettledParticles particles;
+    if (worldRank() == 0) {
+      soil_record_ = adapter::soilRecordJson(soil, soil_file_, adapter::settledSoilChecksum(soil_file_));
+      particles = fromNeutral(study, soil);
     }
     auto count = static_cast<std::uint64_t>(particles.size());
     MPI_Bcast(&count, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
@@ -575,31 +617,6 @@ class Engine {
       particles.insert(particles.end(), {p.centre_m[0], p.centre_m[1], p.centre_m[2], p.radius_m,
                                          static_cast<double>(atomType(study, p.material))});
     return particles;
-  }
-
-  // Inserts the layers and lets them settle under gravity until the translational kinetic energy is
-  // below soil.settle_kinetic_energy_J. Rotational energy is not part of the criterion: a spin about
-  // the contact normal is resisted by none of LIGGGHTS' laws here (no torsional friction), so a
-  // particle can keep drilling in place while the packing is at rest; the saved state has no spin.
-  void deposit(Instance& deposition, const study::Study& study, const InputDeck& deck) {
-    for (const auto& line : deck.deposition) deposition.command(line);
-    const auto chunk = std::max<long long>(1, std::llround(kSettleCheck_s / dt_));
-    const double fall_time = 2 * std::sqrt(2 * deck.insertion_top_m / kGravity);
-    double t = 0;
-    while (true) {
-      deposition.command("run " + std::to_string(chunk) + " post no");
-      t += static_cast<double>(chunk) * dt_;
-      const double energy = deposition.computeScalar("kinetic_energy");
-      if (!std::isfinite(energy))
-        throw CouplingError(ErrorCode::SimulationFailed, "deposition diverged (kinetic energy is not finite); "
-                                                         "reduce dem.dt_fraction or dem.dt_s");
-      if (t >= fall_time && energy < study.soil.settle_kinetic_energy_J) break;
-      if (t > fall_time + kSettleLimit_s)
-        throw CouplingError(ErrorCode::SimulationFailed,
-                            "deposition did not settle: kinetic energy " + std::to_string(energy) + " J after " +
-                                std::to_string(t) + " s, soil.settle_kinetic_energy_J is " +
-                                std::to_string(study.soil.settle_kinetic_energy_J) + " J");
-    }
   }
 
   void findMesh(std::size_t g) {
@@ -744,6 +761,7 @@ class Engine {
   LAMMPS_NS::LAMMPS* lmp_ = nullptr;  // instance_'s
   std::filesystem::path soil_file_;
   bool soil_deposited_ = false;
+  std::string soil_record_;  // adapter::soilRecordJson() of the soil file (rank 0)
   std::vector<ToolState> tools_;
   double dt_ = 0;
   LAMMPS_NS::bigint start_step_ = 0;
@@ -827,6 +845,7 @@ class LiggghtsBackend final : public adapter::CouplingApi {
     i.backend = "liggghts";
     i.version = e.version();
     i.dem_time_step_s = e.timeStep();
+    i.soil_json = e.soilRecord();
     return i;
   }
 
@@ -976,6 +995,20 @@ SoilOrigin soilOrigin(adapter::CouplingApi& backend) { return liggghtsBackend(ba
 
 std::vector<std::array<double, 4>> particles(adapter::CouplingApi& backend) {
   return liggghtsBackend(backend, "particles").particles();
+}
+
+adapter::SettledSoil depositSoil(const study::Study& study) {
+  ensureMpi();
+  const auto work_dir = std::filesystem::temp_directory_path() / uniqueWorkDirectoryName(worldRank());
+  std::filesystem::create_directories(work_dir);
+  struct Cleanup {
+    std::filesystem::path dir;
+    ~Cleanup() {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  } cleanup{work_dir};
+  return depositInInstance(study, translateStudy(study, work_dir), work_dir);
 }
 
 bool isLeaderRank() {

@@ -1,10 +1,12 @@
 // The builtin backend through the coupling API on a small deposited bin with a plate tool.
 #include "demfem/adapter/plate_surface.hpp"
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/adapter/tool_drive.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdlib>
@@ -65,16 +67,39 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
   const SoilDirectory soil_dir;
   const study::Study st = smallStudy();
   auto api = builtin::makeBackend(st);
-  const auto soil_file = builtin::soilFile(st, soil_dir.dir);
+  const auto soil_file = adapter::settledSoilFile(st, soil_dir.dir);
   REQUIRE(std::filesystem::exists(soil_file));
 
-  SECTION("settled soil: layers by depth, surface at the fill height") {
-    const auto soil = builtin::readSettledSoil(soil_file);
+  SECTION("settled soil: layers by depth, surface at the fill height, its figures recorded") {
+    const auto soil = adapter::readSettledSoil(soil_file, st);
     CHECK(soil.particles.size() > 300);
     for (const auto& p : soil.particles) {
-      CHECK(p.x[1] <= st.soil.fill_height_m);
-      CHECK(p.layer == (st.soil.fill_height_m - p.x[1] < 0.01 ? 0 : 1));
+      CHECK(p.x_m[1] <= st.soil.fill_height_m);
+      CHECK(p.layer == (st.soil.fill_height_m - p.x_m[1] < 0.01 ? 0 : 1));
     }
+    CHECK(soil.backend == study::DepositionBackend::Builtin);
+    CHECK(soil.seed == st.soil.deposition_seed);
+    CHECK(soil.settling.stages == static_cast<int>(st.soil.layers.size()) + 1);
+    CHECK(soil.settling.threshold_J == st.soil.settle_kinetic_energy_J);
+    CHECK(soil.settling.surface_height_m == adapter::soilSurfaceHeight(soil.particles, st.soil.diameter_max_m));
+    CHECK(soil.settling.surface_height_m > st.soil.fill_height_m - st.soil.diameter_max_m);
+    CHECK(soil.settling.surface_height_m < st.soil.fill_height_m + st.soil.diameter_max_m / 2);
+    // The run records the soil it started from.
+    const auto record = nlohmann::json::parse(api->info().soil_json);
+    CHECK(record.at("particles") == soil.particles.size());
+    CHECK(record.at("file") == soil_file.string());
+    CHECK(record.at("file_checksum") == adapter::settledSoilChecksum(soil_file));
+    CHECK(record.at("settled") == adapter::unsettledReason(soil.settling).empty());
+  }
+
+  SECTION("another core count runs on the same soil file") {
+    study::Study two = st;
+    two.dem.threads = 2;
+    const auto before = std::filesystem::last_write_time(soil_file);
+    auto again = builtin::makeBackend(two);
+    CHECK(adapter::settledSoilFile(two, soil_dir.dir) == soil_file);
+    CHECK(std::filesystem::last_write_time(soil_file) == before);  // read, not deposited again
+    CHECK(nlohmann::json::parse(again->info().soil_json).at("file_checksum") == adapter::settledSoilChecksum(soil_file));
   }
 
   SECTION("geometry and node positions are the plate's keypoints") {
@@ -216,9 +241,9 @@ TEST_CASE("dragging the tool through the soil loads it against the travel, more 
   // tip engages grains centred up to a radius below it (depth d + R), and the side wedges of a 3D
   // cut and the friction on the plate's faces add up to 50 %. The bracket is wide because the mean
   // of one chaotic realisation in a bin of a few hundred grains scatters by tens of percent.
-  const auto settled = builtin::readSettledSoil(builtin::soilFile(deep, soil_dir.dir));
+  const auto settled = adapter::readSettledSoil(adapter::settledSoilFile(deep, soil_dir.dir));
   double solid_volume = 0;
-  for (const auto& p : settled.particles) solid_volume += 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius, 3);
+  for (const auto& p : settled.particles) solid_volume += 4.0 / 3.0 * std::numbers::pi * std::pow(p.radius_m, 3);
   const auto& soil = deep.soil;
   const double gamma = 2600 * 9.81 * solid_volume / (soil.bin_length_m * soil.bin_width_m * soil.fill_height_m);
   const auto kp = [](double phi_deg) {

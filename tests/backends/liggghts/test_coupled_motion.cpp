@@ -31,6 +31,7 @@ study::Study smallCoupledStudy() {
   doc["soil"]["bin"]["width_mm"] = 80;
   doc["soil"]["fill_height_mm"] = 40;
   doc["soil"]["layers"][3]["bottom_depth_mm"] = 40;
+  doc["soil"]["deposition"]["backend"] = "liggghts";  // a LIGGGHTS-only test: LIGGGHTS deposits its soil
   auto& tool = doc["tools"][0];
   tool["geometry"]["length_mm"] = 120;
   tool["geometry"]["width_mm"] = 20;

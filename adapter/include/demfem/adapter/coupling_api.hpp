@@ -69,6 +69,9 @@ struct BackendInfo {
   std::string version;        // backend's own version string
   std::int32_t protocol_version = 1;
   double dem_time_step_s = 0; // the DEM step in use
+  // The settled soil the simulation started from, as the JSON object text of
+  // adapter::soilRecordJson() (settled_soil.hpp); empty for backends without soil.
+  std::string soil_json;
 };
 
 struct GeometryInfo {

@@ -24,7 +24,7 @@
 // - Outputs in output_dir (docs/coupling-guide.md):
 //   sensors.csv  `t_s,displacement_mm,force_N,deformation_mm,tilt_deg`, one row per FEM step of the
 //                drag phase (t_s from the start of the drag; %.17g), sidecar sensors.json
-//                {"tool","depth_mm","complete",...};
+//                {"tool","depth_mm","complete",...; "soil": the DEM's BackendInfo::soil_json if any};
 //   keypoints.csv `id,x_m,y_m,z_m` undeformed keypoints (FEM order);
 //   keypoint_displacements.f64  little-endian float64 records [t_s, u (3n, m, FEM keypoint order)],
 //                one per drag-phase step;

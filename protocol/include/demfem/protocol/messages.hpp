@@ -118,6 +118,9 @@ struct HelloReply {
   std::string backend;          // "builtin", "liggghts", "harmonic", ...
   std::string backend_version;
   double dem_time_step_s = 0;
+  // Optional header field "soil": a JSON object describing the settled soil the DEM started from
+  // (figures of its deposition); kept here as that object's JSON text, "" when absent.
+  std::string soil_json;
   bool operator==(const HelloReply&) const = default;
 };
 struct GeometryEntry {

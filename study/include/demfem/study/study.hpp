@@ -97,6 +97,10 @@ struct Layer {
   bool operator==(const Layer&) const = default;
 };
 
+// Which DEM deposits the settled soil (soil.deposition.backend): every DEM backend starts from that
+// one settled soil (the backend-neutral file of adapter/settled_soil.hpp).
+enum class DepositionBackend { Builtin, Liggghts };
+
 struct Soil {
   double bin_length_m = 0.650;  // along z
   double bin_width_m = 0.250;   // along x
@@ -110,6 +114,7 @@ struct Soil {
   ContactModel contact;
   std::uint64_t deposition_seed = 1;
   double settle_kinetic_energy_J = 1e-6;   // deposition ends below this total kinetic energy
+  DepositionBackend deposition_backend = DepositionBackend::Builtin;
   bool operator==(const Soil&) const = default;
 };
 
@@ -273,9 +278,16 @@ std::string describe(const Study& study);
 // Stable content hash of everything that determines the settled soil (for deposit reuse): FNV-1a
 // 64 of the canonical JSON text (sorted keys, shortest round-trip numbers) of the bin, fill height,
 // particle sizes, the particle and bin materials, layers, the interactions among them, the contact
-// model, the deposition settings and the DEM backend, time step and thread count. Tools do not
-// enter. 16 lowercase hex digits. Throws std::invalid_argument for kinds without soil.
+// model, the deposition settings (seed, threshold, deposition backend) and the DEM time step
+// settings. Tools, the run's DEM backend (dem.backend), dem.seed and dem.threads do not enter: one
+// soil serves every backend and core count. 16 lowercase hex digits. Throws std::invalid_argument
+// for kinds without soil.
 std::string soilHash(const Study& study);
+
+// The file spelling of a deposition backend ("builtin", "liggghts") and back; the latter throws
+// std::invalid_argument naming the accepted words.
+const std::string& depositionBackendName(DepositionBackend backend);
+DepositionBackend parseDepositionBackend(const std::string& name);
 
 // True for the kinds that simulate soil (coupled, dem-only, cone-penetration).
 bool hasSoil(StudyKind kind);

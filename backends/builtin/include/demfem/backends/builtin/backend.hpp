@@ -11,8 +11,13 @@
 namespace demfem::builtin {
 
 // Builds the DEM simulation of `study` (soil, bin, tools at their start positions) ready for the
-// coupling cycle; deposits the soil first unless it is saved (soil_bin.hpp), reporting to
-// `deposit_progress` (may be empty). Throws adapter::CouplingError on a study this backend cannot run.
+// coupling cycle. The soil is the study's settled-soil file adapter::settledSoilFile(study,
+// adapter::defaultSoilDirectory()) (adapter/settled_soil.hpp), whichever backend deposited it; a
+// missing file is deposited here (depositSoil(), study.dem.threads, reporting to `deposit_progress`,
+// which may be empty) and written when the study deposits with the built-in DEM, and is BadRequest
+// naming the file otherwise. info().soil_json records the soil (adapter::soilRecordJson). Throws
+// adapter::CouplingError on a study this backend cannot run or a damaged or foreign soil file
+// (BadRequest naming it).
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress = {});
 
 // The DEM mesh of a tool: the plate's keypoint triangulation shared with the FEM

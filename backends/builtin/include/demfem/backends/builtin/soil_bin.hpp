@@ -1,6 +1,6 @@
 // The soil bin of a study for the built-in DEM: the box, the gravity deposition of the particle
-// assembly in layers (paper Section 2.9, Fig. 4a-b) and the settled-soil file reused by every study
-// on the same soil (docs/architecture.md section 5).
+// assembly in layers (paper Section 2.9, Fig. 4a-b) into the backend-neutral settled soil
+// (adapter/settled_soil.hpp) that every study on the same soil, on either backend, starts from.
 //
 // Contract
 // - Bin frame (docs/architecture.md section 10, study.hpp), metres: origin at a bottom corner, x in [0, W],
@@ -11,12 +11,12 @@
 //   kinetic energy is below soil.settle_kinetic_energy_J (or its time cap, reported). The step is
 //   the study's or a tenth of the stiffest spring's critical step, whichever is larger. Particles whose
 //   centre ends above the fill height are removed; the rest are tagged by the depth of their centre
-//   below the fill height with the layer (and that layer's material) covering that depth.
-// - Settled-soil file: binary, little endian, "DFSOIL01", the soil hash (study::soilHash), the
-//   particle count, then x y z radius (float64) and layer (int32) per particle. It is found by the
-//   hash: soilFile(study, dir) = dir / ("soil-" + hash + ".bin").
+//   below the fill height with the layer (and that layer's material) covering that depth, and settle
+//   once more. The result carries its settling figures: stages = layers + 1 (the final settling),
+//   those that hit the cap, the final total kinetic energy, surface height and packing fraction.
 #pragma once
 
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/study/study.hpp"
 
@@ -27,25 +27,10 @@
 
 namespace demfem::builtin {
 
-struct SettledParticle {
-  Vec3 x;
-  double radius = 0;
-  int layer = 0;
-};
-
-struct SettledSoil {
-  std::string soil_hash;
-  std::vector<SettledParticle> particles;
-};
-
+// What a deposition cost, besides the settling figures the soil itself carries.
 struct DepositReport {
-  std::size_t particles = 0;
-  double simulated_s = 0;
   long steps = 0;
   double time_step_s = 0;
-  double final_kinetic_energy_J = 0;
-  bool settled = true;            // every stage reached the kinetic-energy threshold
-  double surface_height_m = 0;    // highest particle top after trimming
 };
 
 // The DEM domain of a study's bin (room above the fill for deposition and tools).
@@ -70,21 +55,12 @@ std::size_t estimatedParticleCount(const study::Soil& soil);
 // summary line (empty otherwise).
 using DepositProgress = std::function<void(double fraction, const std::string& stage_line)>;
 
-// Deposits and settles the soil of `study` (deterministic for its seed and `threads`).
-// `progress` may be empty.
-SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress);
-
-void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil);
-// Throws std::runtime_error naming the file on a missing, truncated or foreign file.
-SettledSoil readSettledSoil(const std::filesystem::path& file);
-
-// Where the settled soil of `study` lives in `dir`.
-std::filesystem::path soilFile(const study::Study& study, const std::filesystem::path& dir);
-// DEMFEM_SOIL_DIR if set, else "soil" in the working directory.
-std::filesystem::path defaultSoilDirectory();
+// Deposits and settles the soil of `study` (deterministic for its seed and `threads`; the soil
+// records both). `progress` may be empty.
+adapter::SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress);
 
 // Adds the settled particles to `sim` with their layer materials, in spatial order (cells of one
 // diameter, x fastest, then y, then z), not in the file's order.
-void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const SettledSoil& settled);
+void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled);
 
 }  // namespace demfem::builtin

@@ -5,14 +5,15 @@
 // - The study is translated by translateStudy() (input_deck.hpp) and checked before any command
 //   reaches LIGGGHTS: LIGGGHTS stops the process on an input error, so what it would reject is
 //   reported here as adapter::CouplingError instead.
-// - Construction takes the settled soil from BackendOptions::soil_directory (default: $DEMFEM_SOIL_DIR,
-//   else ./soil) / liggghts-soil-<study::soilHash>-v<deposition version>.bin, or, without that file,
-//   deposits it (insert, settle under gravity until the translational kinetic energy falls below
-//   soil.settle_kinetic_energy_J, remove particles centred above the fill height) in a LIGGGHTS
-//   instance of its own and writes the file. Either way the simulation starts from the file's
-//   particles at rest (positions, radii, types; no contact history), so a run gives the same numbers
-//   whether its soil was cached or not. A damaged file or one of another soil is an error
-//   (BadRequest naming it), never silently replaced. Then the particles in the tools' way are
+// - Construction takes the settled soil from the backend-neutral file adapter::settledSoilFile(study,
+//   BackendOptions::soil_directory, default: $DEMFEM_SOIL_DIR, else ./soil), whichever backend
+//   deposited it. Without that file, a study whose soil.deposition.backend is "liggghts" is deposited
+//   here (depositSoil()) and the file written; any other is BadRequest naming the file (the built-in
+//   deposition is not in this library: `demfem deposit` or demfem-dem makes the file). Either way
+//   the simulation starts from the file's particles at rest (positions, radii, layer materials; no
+//   contact history), so a run gives the same numbers whether its soil was deposited or read. A
+//   damaged file or one of another soil is an error (BadRequest naming it), never silently
+//   replaced. info().soil_json records the soil (adapter::soilRecordJson). Then the particles in the tools' way are
 //   removed and the tools put at their start positions (toolStartOrigin(), velocity zero); time()
 //   is 0 after it. With
 //   BackendOptions::probes set, the soil is replaced by fixed probe spheres (no deposition, no time
@@ -27,6 +28,7 @@
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/study/study.hpp"
 
 #include <array>
@@ -51,8 +53,8 @@ struct BackendOptions {
   std::vector<ProbeSphere> probes;
   // Where settled soils are kept; empty: $DEMFEM_SOIL_DIR if set, else "soil" in the working directory.
   std::filesystem::path soil_directory;
-  // Non-empty: the settled soil to start from (particles at rest) instead of the cached or deposited
-  // one, e.g. another backend's, to compare the two on the same particles. No soil file is used.
+  // Non-empty: the settled soil to start from (particles at rest) instead of the study's settled-soil
+  // file; no soil file is read or written and info().soil_json stays empty.
   std::vector<Sphere> settled_soil;
 };
 
@@ -83,6 +85,14 @@ SoilOrigin soilOrigin(adapter::CouplingApi& backend);
 // Every particle's centre and radius (x, y, z, r in m, bin frame) in LIGGGHTS id order. Single MPI
 // rank only (Unsupported otherwise); throws BadRequest as meshTotalForce().
 std::vector<std::array<double, 4>> particles(adapter::CouplingApi& backend);
+
+// Deposits the study's soil in a LIGGGHTS instance of its own: one insert/pack per layer, settling
+// under gravity until the translational kinetic energy is below soil.settle_kinetic_energy_J (at
+// most 20 s after twice the fall time; a soil that hits that cap is returned with stages_capped = 1,
+// not refused), particles centred above the fill height removed; layer of each particle: the layer
+// of its material that covers (or is nearest to) its depth. Not written to any file. Collective over
+// the MPI ranks; throws CouplingError (SimulationFailed) if the deposition diverges.
+adapter::SettledSoil depositSoil(const study::Study& study);
 
 // MPI (`mpirun -np N demfem-dem --backend liggghts ...`): every rank runs demfem-dem. The leader
 // (rank 0) serves the protocol and calls the backend built by makeBackend(); every other rank calls

@@ -1,0 +1,97 @@
+// The settled soil of a study as one backend-neutral artefact: the particles every DEM backend starts
+// a run from, whichever backend deposited them (soil.deposition.backend), with the figures of their
+// settling (docs/builtin-dem.md, "Settled soil file").
+//
+// Contract
+// - Particles in the bin frame (study.hpp), metres: centre, radius and the index of the layer in
+//   soil.layers (0 = top) whose material the particle has. At rest: no velocities, no contact history.
+// - File, little endian (the platforms both backends are built for):
+//     8 bytes   magic "DFSOILNT"
+//     uint32    format version (kSettledSoilFormatVersion)
+//     uint32    byte length H of the header
+//     H bytes   header, a JSON object: soil_hash (study::soilHash), deposition {backend, seed, cores},
+//               settling {kinetic_energy_J, threshold_J, stages, stages_capped, simulated_s,
+//               surface_height_m, packing_fraction}, particle_count
+//     36 bytes per particle: x_m, y_m, z_m, radius_m (float64), layer (int32)
+//     uint64    FNV-1a 64 (study::fnv1a64) of every byte before it
+//   readSettledSoil() checks magic, version, header, length and checksum and throws
+//   std::runtime_error naming the file and what is wrong; nothing is repaired or guessed.
+// - writeSettledSoil() writes under a unique temporary name in the same directory and renames, so a
+//   reader never sees half a file; every write is checked.
+// - The file of a study is settledSoilFile(study, dir) = dir / ("soil-" + soilHash + ".bin"), the
+//   same name for every backend and core count (the hash leaves out dem.backend and dem.threads).
+#pragma once
+
+#include "demfem/study/study.hpp"
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace demfem::adapter {
+
+inline constexpr std::uint32_t kSettledSoilFormatVersion = 1;
+
+struct SoilParticle {
+  std::array<double, 3> x_m{};
+  double radius_m = 0;
+  std::int32_t layer = 0;
+  bool operator==(const SoilParticle&) const = default;
+};
+
+// How the deposition ended. The kinetic energy is the deposition backend's criterion: total
+// (built-in) or translational (LIGGGHTS, whose laws leave a spin about a contact normal unresisted).
+struct SettlingFigures {
+  double kinetic_energy_J = 0;   // at the end of the deposition
+  double threshold_J = 0;        // soil.settle_kinetic_energy_J it had to fall below
+  std::int32_t stages = 0;       // settling phases of the deposition
+  std::int32_t stages_capped = 0;  // phases that hit their time cap above the threshold
+  double simulated_s = 0;        // simulated deposition time
+  double surface_height_m = 0;   // soilSurfaceHeight()
+  double packing_fraction = 0;   // packingFraction()
+  bool operator==(const SettlingFigures&) const = default;
+};
+
+struct SettledSoil {
+  std::string soil_hash;
+  study::DepositionBackend backend = study::DepositionBackend::Builtin;
+  std::uint64_t seed = 0;        // soil.deposition.seed
+  std::int32_t cores = 1;        // threads or MPI ranks of the deposition (the bits depend on it)
+  SettlingFigures settling;
+  std::vector<SoilParticle> particles;
+  bool operator==(const SettledSoil&) const = default;
+};
+
+void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil);
+SettledSoil readSettledSoil(const std::filesystem::path& file);
+// Same, and the soil must be the study's: same soil hash, every layer index in soil.layers.
+SettledSoil readSettledSoil(const std::filesystem::path& file, const study::Study& study);
+
+// The FNV-1a 64 checksum stored at the end of a settled-soil file (16 hex digits); throws like
+// readSettledSoil() for a file that is not one.
+std::string settledSoilChecksum(const std::filesystem::path& file);
+
+std::filesystem::path settledSoilFile(const study::Study& study, const std::filesystem::path& dir);
+// $DEMFEM_SOIL_DIR if set, else "soil" in the working directory.
+std::filesystem::path defaultSoilDirectory();
+
+// Mean top (y + r, m above the floor) of the particles whose top lies within one largest diameter
+// of the highest top; 0 for no particles.
+double soilSurfaceHeight(const std::vector<SoilParticle>& particles, double diameter_max_m);
+// Particle volume over bin width x length x fill height.
+double packingFraction(const std::vector<SoilParticle>& particles, const study::Soil& soil);
+
+// Why the soil is not settled ("" if it is): a phase hit its time cap or the final kinetic energy is
+// not below the threshold.
+std::string unsettledReason(const SettlingFigures& settling);
+
+// The soil's figures as the JSON object text a run records ("soil" in sensors.json): file,
+// file_checksum, soil_hash, deposition_backend, deposition_seed, deposition_cores, particles,
+// settled, kinetic_energy_J, threshold_J, stages, stages_capped, simulated_s, surface_height_mm,
+// packing_fraction.
+std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path& file, const std::string& checksum);
+
+}  // namespace demfem::adapter

@@ -1,0 +1,246 @@
+#include "demfem/adapter/settled_soil.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <stdexcept>
+#include <unistd.h>
+
+namespace demfem::adapter {
+
+namespace {
+
+constexpr char kMagic[8] = {'D', 'F', 'S', 'O', 'I', 'L', 'N', 'T'};
+constexpr std::size_t kParticleBytes = 36;
+constexpr std::size_t kMaxHeaderBytes = 1 << 16;
+
+template <class T>
+void append(std::string& bytes, const T& value) {
+  bytes.append(reinterpret_cast<const char*>(&value), sizeof value);
+}
+
+template <class T>
+T take(const std::string& bytes, std::size_t& at) {
+  T value;
+  std::memcpy(&value, bytes.data() + at, sizeof value);
+  at += sizeof value;
+  return value;
+}
+
+std::string hex16(std::uint64_t value) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+  return text;
+}
+
+nlohmann::json headerJson(const SettledSoil& soil) {
+  const SettlingFigures& s = soil.settling;
+  return {{"soil_hash", soil.soil_hash},
+          {"deposition",
+           {{"backend", study::depositionBackendName(soil.backend)}, {"seed", soil.seed}, {"cores", soil.cores}}},
+          {"settling",
+           {{"kinetic_energy_J", s.kinetic_energy_J},
+            {"threshold_J", s.threshold_J},
+            {"stages", s.stages},
+            {"stages_capped", s.stages_capped},
+            {"simulated_s", s.simulated_s},
+            {"surface_height_m", s.surface_height_m},
+            {"packing_fraction", s.packing_fraction}}},
+          {"particle_count", soil.particles.size()}};
+}
+
+// The whole file, read and checked: magic, version, checksum, header and length.
+struct CheckedFile {
+  std::string bytes;
+  nlohmann::json header;
+  std::size_t particles_at = 0;
+  std::uint64_t checksum = 0;
+};
+
+CheckedFile readChecked(const std::filesystem::path& file) {
+  const auto fail = [&file](const std::string& what) {
+    return std::runtime_error("settled soil file " + file.string() + ": " + what +
+                              " (delete it and deposit the soil again: demfem deposit STUDY)");
+  };
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw fail("cannot be opened");
+  CheckedFile f;
+  f.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (in.bad()) throw fail("read error");
+  const std::string& b = f.bytes;
+  if (b.size() < sizeof kMagic + 8 || std::memcmp(b.data(), kMagic, sizeof kMagic) != 0)
+    throw fail("not a settled-soil file (magic \"DFSOILNT\" missing)");
+  std::size_t at = sizeof kMagic;
+  const auto version = take<std::uint32_t>(b, at);
+  if (version != kSettledSoilFormatVersion)
+    throw fail("format version " + std::to_string(version) + ", this demfem reads version " +
+               std::to_string(kSettledSoilFormatVersion));
+  const auto header_bytes = take<std::uint32_t>(b, at);
+  if (header_bytes > kMaxHeaderBytes || at + header_bytes + 8 > b.size())
+    throw fail("truncated (header of " + std::to_string(header_bytes) + " bytes announced, file has " +
+               std::to_string(b.size()) + ")");
+  std::size_t end = b.size() - 8;
+  f.checksum = take<std::uint64_t>(b, end);
+  if (f.checksum != study::fnv1a64(std::string_view(b.data(), b.size() - 8)))
+    throw fail("checksum mismatch: the file is damaged or truncated");
+  try {
+    f.header = nlohmann::json::parse(b.substr(at, header_bytes));
+  } catch (const nlohmann::json::exception& e) {
+    throw fail(std::string("header is not JSON: ") + e.what());
+  }
+  f.particles_at = at + header_bytes;
+  return f;
+}
+
+}  // namespace
+
+void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil) {
+  const std::string header = headerJson(soil).dump();
+  std::string bytes(kMagic, sizeof kMagic);
+  append(bytes, kSettledSoilFormatVersion);
+  append(bytes, static_cast<std::uint32_t>(header.size()));
+  bytes += header;
+  bytes.reserve(bytes.size() + soil.particles.size() * kParticleBytes + 8);
+  for (const SoilParticle& p : soil.particles) {
+    for (double c : p.x_m) append(bytes, c);
+    append(bytes, p.radius_m);
+    append(bytes, p.layer);
+  }
+  append(bytes, study::fnv1a64(bytes));
+
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
+  // A unique name per process: concurrent depositions of one soil never write into the same file.
+  const std::filesystem::path partial = file.string() + "." + std::to_string(::getpid()) + ".partial";
+  {
+    std::ofstream out(partial, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(partial, ignored);
+      throw std::runtime_error("settled soil file " + partial.string() + ": write failed");
+    }
+  }
+  std::filesystem::rename(partial, file);
+}
+
+SettledSoil readSettledSoil(const std::filesystem::path& file) {
+  const CheckedFile f = readChecked(file);
+  const auto fail = [&file](const std::string& what) {
+    return std::runtime_error("settled soil file " + file.string() + ": " + what);
+  };
+  SettledSoil soil;
+  std::uint64_t count = 0;
+  try {
+    const auto& h = f.header;
+    soil.soil_hash = h.at("soil_hash").get<std::string>();
+    const auto& d = h.at("deposition");
+    soil.backend = study::parseDepositionBackend(d.at("backend").get<std::string>());
+    soil.seed = d.at("seed").get<std::uint64_t>();
+    soil.cores = d.at("cores").get<std::int32_t>();
+    const auto& s = h.at("settling");
+    soil.settling = {s.at("kinetic_energy_J").get<double>(), s.at("threshold_J").get<double>(),
+                     s.at("stages").get<std::int32_t>(),     s.at("stages_capped").get<std::int32_t>(),
+                     s.at("simulated_s").get<double>(),      s.at("surface_height_m").get<double>(),
+                     s.at("packing_fraction").get<double>()};
+    count = h.at("particle_count").get<std::uint64_t>();
+  } catch (const std::exception& e) {
+    throw fail(std::string("header: ") + e.what());
+  }
+  const std::size_t payload = f.bytes.size() - 8 - f.particles_at;
+  if (payload != count * kParticleBytes)
+    throw fail(std::to_string(count) + " particles announced, " + std::to_string(payload) + " bytes of particles");
+  soil.particles.resize(count);
+  std::size_t at = f.particles_at;
+  for (SoilParticle& p : soil.particles) {
+    for (double& c : p.x_m) c = take<double>(f.bytes, at);
+    p.radius_m = take<double>(f.bytes, at);
+    p.layer = take<std::int32_t>(f.bytes, at);
+  }
+  return soil;
+}
+
+SettledSoil readSettledSoil(const std::filesystem::path& file, const study::Study& study) {
+  SettledSoil soil = readSettledSoil(file);
+  const std::string hash = study::soilHash(study);
+  if (soil.soil_hash != hash)
+    throw std::runtime_error("settled soil file " + file.string() + ": soil hash " + soil.soil_hash +
+                             ", the study's is " + hash);
+  const auto layers = static_cast<std::int32_t>(study.soil.layers.size());
+  for (std::size_t i = 0; i < soil.particles.size(); ++i)
+    if (soil.particles[i].layer < 0 || soil.particles[i].layer >= layers)
+      throw std::runtime_error("settled soil file " + file.string() + ": particle " + std::to_string(i) + " has layer " +
+                               std::to_string(soil.particles[i].layer) + ", /soil/layers has " +
+                               std::to_string(layers));
+  return soil;
+}
+
+std::string settledSoilChecksum(const std::filesystem::path& file) { return hex16(readChecked(file).checksum); }
+
+std::filesystem::path settledSoilFile(const study::Study& study, const std::filesystem::path& dir) {
+  return dir / ("soil-" + study::soilHash(study) + ".bin");
+}
+
+std::filesystem::path defaultSoilDirectory() {
+  if (const char* env = std::getenv("DEMFEM_SOIL_DIR"); env && *env) return env;
+  return "soil";
+}
+
+double soilSurfaceHeight(const std::vector<SoilParticle>& particles, double diameter_max_m) {
+  double highest = 0;
+  for (const auto& p : particles) highest = std::max(highest, p.x_m[1] + p.radius_m);
+  double sum = 0;
+  std::size_t count = 0;
+  for (const auto& p : particles)
+    if (p.x_m[1] + p.radius_m > highest - diameter_max_m) sum += p.x_m[1] + p.radius_m, ++count;
+  return count ? sum / static_cast<double>(count) : 0.0;
+}
+
+double packingFraction(const std::vector<SoilParticle>& particles, const study::Soil& soil) {
+  double volume = 0;
+  for (const auto& p : particles) volume += 4.0 / 3.0 * std::numbers::pi * p.radius_m * p.radius_m * p.radius_m;
+  return volume / (soil.bin_width_m * soil.bin_length_m * soil.fill_height_m);
+}
+
+std::string unsettledReason(const SettlingFigures& s) {
+  std::string reason;
+  if (s.stages_capped > 0)
+    reason = std::to_string(s.stages_capped) + " of " + std::to_string(s.stages) +
+             " settling stages hit their time cap above the kinetic-energy threshold";
+  if (!(s.kinetic_energy_J < s.threshold_J)) {
+    char text[160];
+    std::snprintf(text, sizeof text, "final kinetic energy %.3g J is not below soil.deposition.settle_kinetic_energy_J = %.3g J",
+                  s.kinetic_energy_J, s.threshold_J);
+    reason += (reason.empty() ? "" : "; ") + std::string(text);
+  }
+  return reason;
+}
+
+std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path& file, const std::string& checksum) {
+  const SettlingFigures& s = soil.settling;
+  const nlohmann::json record{{"file", file.string()},
+                              {"file_checksum", checksum},
+                              {"soil_hash", soil.soil_hash},
+                              {"deposition_backend", study::depositionBackendName(soil.backend)},
+                              {"deposition_seed", soil.seed},
+                              {"deposition_cores", soil.cores},
+                              {"particles", soil.particles.size()},
+                              {"settled", unsettledReason(s).empty()},
+                              {"kinetic_energy_J", s.kinetic_energy_J},
+                              {"threshold_J", s.threshold_J},
+                              {"stages", s.stages},
+                              {"stages_capped", s.stages_capped},
+                              {"simulated_s", s.simulated_s},
+                              {"surface_height_mm", s.surface_height_m * 1e3},
+                              {"packing_fraction", s.packing_fraction}};
+  return record.dump();
+}
+
+}  // namespace demfem::adapter

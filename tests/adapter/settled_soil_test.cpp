@@ -1,0 +1,149 @@
+// The backend-neutral settled-soil file (adapter/settled_soil.hpp): exact round trip, refusal of
+// damaged, truncated and foreign files with the file named, the settledness rule, the figures.
+#include "demfem/adapter/settled_soil.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <unistd.h>
+
+namespace {
+
+using namespace demfem;
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("demfem-settled-soil-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+adapter::SettledSoil sample() {
+  adapter::SettledSoil soil;
+  soil.soil_hash = "0123456789abcdef";
+  soil.backend = study::DepositionBackend::Liggghts;
+  soil.seed = 7;
+  soil.cores = 2;
+  soil.settling = {3.5e-7, 1e-6, 5, 0, 2.25, 0.0498, 0.55};
+  // Values whose every bit matters: no decimal text would keep them.
+  soil.particles = {{{0.1 / 3, std::nextafter(0.02, 1.0), 0.3}, 0.00475 + 1e-17, 0},
+                    {{std::numbers::pi / 100, 0.011, 1e-300}, 0.005, 2},
+                    {{0.25, 0.0, 0.65}, 0.0052500000000000003, 1}};
+  return soil;
+}
+
+std::string bytesOf(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const fs::path& file, const std::string& bytes) {
+  std::ofstream(file, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// The message names the file and contains `what`.
+void requireRefused(const fs::path& file, const std::string& what) {
+  try {
+    adapter::readSettledSoil(file);
+    FAIL("read " << file << " without complaint");
+  } catch (const std::runtime_error& e) {
+    const std::string message = e.what();
+    INFO(message);
+    CHECK(message.find(file.string()) != std::string::npos);
+    CHECK(message.find(what) != std::string::npos);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("a settled soil reads back bit for bit with its header", "[adapter][soil]") {
+  const auto file = scratch("roundtrip.bin");
+  const auto soil = sample();
+  adapter::writeSettledSoil(file, soil);
+  const auto back = adapter::readSettledSoil(file);
+  CHECK(back == soil);  // every double compared exactly
+  CHECK(back.particles[0].x_m[1] == std::nextafter(0.02, 1.0));
+  // Layout: 8 magic + 4 version + 4 header length + header + 36 per particle + 8 checksum.
+  const std::string bytes = bytesOf(file);
+  std::uint32_t header_length = 0;
+  std::memcpy(&header_length, bytes.data() + 12, 4);
+  CHECK(bytes.size() == 16 + header_length + 36 * soil.particles.size() + 8);
+  CHECK(bytes.substr(0, 8) == "DFSOILNT");
+  CHECK(adapter::settledSoilChecksum(file).size() == 16);
+}
+
+TEST_CASE("a damaged, truncated or foreign settled-soil file is refused with its name", "[adapter][soil]") {
+  const auto good = scratch("good.bin");
+  adapter::writeSettledSoil(good, sample());
+  const std::string bytes = bytesOf(good);
+
+  const auto flipped = scratch("flipped.bin");
+  std::string f = bytes;
+  f[f.size() - 20] ^= 0x01;  // one bit of the last particle's radius
+  writeBytes(flipped, f);
+  requireRefused(flipped, "checksum");
+
+  const auto truncated = scratch("truncated.bin");
+  writeBytes(truncated, bytes.substr(0, bytes.size() - 36));
+  requireRefused(truncated, "checksum");
+
+  const auto stub = scratch("stub.bin");
+  writeBytes(stub, bytes.substr(0, 20));
+  requireRefused(stub, "truncated");
+
+  const auto foreign = scratch("foreign.bin");
+  writeBytes(foreign, "DFSOIL01 an older built-in soil file");
+  requireRefused(foreign, "not a settled-soil file");
+
+  const auto newer = scratch("newer.bin");
+  std::string v = bytes;
+  v[8] = 9;  // format version 9
+  writeBytes(newer, v);
+  requireRefused(newer, "format version 9");
+
+  requireRefused(scratch("missing.bin"), "cannot be opened");
+}
+
+TEST_CASE("a soil of another study or with a layer the study lacks is refused", "[adapter][soil]") {
+  study::Study s;
+  s.soil.materials = {{"grain", 2000, 5e7, 0.25, 1e6}, {"steel", 7850, 2e11, 0.3, 1e6}};
+  s.soil.bin_material = "steel";
+  s.soil.layers = {{"grain", 0, s.soil.fill_height_m}};
+  s.soil.interactions = {{"grain", "grain", 0.5, 0.5, 0, 0}, {"grain", "steel", 0.5, 0.5, 0, 0}};
+  auto soil = sample();
+  const auto file = scratch("other.bin");
+  adapter::writeSettledSoil(file, soil);
+  CHECK_THROWS_WITH(adapter::readSettledSoil(file, s), Catch::Contains(file.string()) && Catch::Contains("soil hash"));
+  soil.soil_hash = study::soilHash(s);
+  adapter::writeSettledSoil(file, soil);
+  CHECK_THROWS_WITH(adapter::readSettledSoil(file, s), Catch::Contains("layer 2"));  // one layer only
+  soil.particles.pop_back();
+  soil.particles.pop_back();
+  adapter::writeSettledSoil(file, soil);
+  CHECK(adapter::readSettledSoil(file, s).particles.size() == 1);
+  CHECK(adapter::settledSoilFile(s, "dir") == fs::path("dir") / ("soil-" + study::soilHash(s) + ".bin"));
+}
+
+TEST_CASE("a soil is settled only if no stage was capped and the energy is below the threshold", "[adapter][soil]") {
+  adapter::SettlingFigures s{3.5e-7, 1e-6, 5, 0, 2.0, 0.05, 0.55};
+  CHECK(adapter::unsettledReason(s).empty());
+  s.stages_capped = 3;
+  CHECK_THAT(adapter::unsettledReason(s), Catch::Contains("3 of 5 settling stages"));
+  s.stages_capped = 0;
+  s.kinetic_energy_J = 1e-6;  // not below
+  CHECK_THAT(adapter::unsettledReason(s), Catch::Contains("not below"));
+}
+
+TEST_CASE("surface height and packing fraction follow their definitions", "[adapter][soil]") {
+  // Two particles at the top within one diameter of each other, one deep: mean of the two tops.
+  const std::vector<adapter::SoilParticle> p{{{0, 0.045, 0}, 0.005, 0}, {{0, 0.040, 0}, 0.005, 0}, {{0, 0.01, 0}, 0.005, 0}};
+  CHECK(adapter::soilSurfaceHeight(p, 0.0105) == Approx((0.050 + 0.045) / 2).epsilon(1e-15));
+  study::Soil soil;
+  soil.bin_width_m = 0.1, soil.bin_length_m = 0.2, soil.fill_height_m = 0.05;
+  const double sphere = 4.0 / 3.0 * std::numbers::pi * 0.005 * 0.005 * 0.005;
+  CHECK(adapter::packingFraction(p, soil) == Approx(3 * sphere / (0.1 * 0.2 * 0.05)).epsilon(1e-15));
+}
