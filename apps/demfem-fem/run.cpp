@@ -99,7 +99,8 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
       std::signal(signal, SIG_DFL);
       std::raise(signal);  // exit by the signal, as a shell expects
     }
-    throw std::runtime_error(std::string(e.what()) + " (outputs in " + options.output_dir.string() + " marked incomplete)");
+    throw std::runtime_error(std::string(e.what()) + " (outputs in " + options.output_dir.string() +
+                             "; their sensors.json says they are incomplete)");
   }
   dem.shutdown();
   coupled->finish();

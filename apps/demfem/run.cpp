@@ -180,7 +180,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   if (forwarded) endBySignal(forwarded, work);
   if (!fem.succeeded() || !dem.succeeded())
     throw std::runtime_error("coupled run failed: demfem-fem " + fem.outcome() + ", demfem-dem " + dem.outcome() +
-                             " (see their messages above; outputs are marked incomplete)");
+                             " (see their messages above)");
 }
 
 }  // namespace

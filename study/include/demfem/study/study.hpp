@@ -165,7 +165,8 @@ struct ToolSensors {
   bool operator==(const ToolSensors&) const = default;
 };
 
-// Rigid motion in the bin frame: inserted vertically to `depth`, then dragged in +z.
+// Rigid motion in the bin frame: inserted vertically to `depth`, then dragged in +z. The motion a
+// run follows is computed from these by planToolMotion() (tool_motion.hpp).
 struct ToolMotion {
   double depth_m = 0.018;
   double velocity_m_s = 0.03119;
