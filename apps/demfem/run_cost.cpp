@@ -3,6 +3,7 @@
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/fem/model.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -23,16 +24,6 @@ constexpr double kReferenceReductionS = 26.0;
 constexpr double kReferenceFemStepS = 0.023;
 
 std::int64_t wholeSteps(double time_s, double dt_s) { return std::max<std::int64_t>(1, std::llround(std::ceil(time_s / dt_s - 1e-9))); }
-
-// Simulated time of the tool's insertion and drag (see the header).
-double motionTime(const study::Study& s, const study::Tool& tool) {
-  const auto& m = tool.motion;
-  const double clearance = s.soil.diameter_max_m;
-  if (s.kind == study::StudyKind::ConePenetration) return (m.depth_m + clearance) / m.velocity_m_s;
-  const double dt = s.fem.dt_s;
-  return static_cast<double>(wholeSteps((m.depth_m + clearance) / m.insertion_velocity_m_s, dt)) * dt +
-         static_cast<double>(std::max<std::int64_t>(1, std::llround(m.stroke_m / m.velocity_m_s / dt))) * dt;
-}
 
 // The built-in backend's DEM step on the bin walls and one smallest particle of each layer material.
 double demStep(const study::Study& s) {
@@ -56,17 +47,16 @@ RunCost estimateRunCost(const study::Study& s) {
   cost.threads = s.dem.backend == "liggghts" ? 1 : s.dem.threads;  // LIGGGHTS: one MPI rank unless started by mpirun
   const bool has_soil = study::hasSoil(s.kind);
   if (s.kind == study::StudyKind::WeightDrop && s.weight_drop) {
-    cost.simulated_s = s.weight_drop->duration_s;
+    cost.fem_steps = wholeSteps(s.weight_drop->duration_s, s.fem.dt_s);
   } else {
-    for (const auto& tool : s.tools) cost.simulated_s = std::max(cost.simulated_s, motionTime(s, tool));
+    for (const auto& tool : s.tools) cost.fem_steps = std::max(cost.fem_steps, study::planToolMotion(s, tool).totalSteps());
   }
-  cost.fem_steps = wholeSteps(cost.simulated_s, s.fem.dt_s);
   cost.simulated_s = static_cast<double>(cost.fem_steps) * s.fem.dt_s;
   for (const auto& tool : s.tools)
     if (tool.fem.deformable && s.kind != study::StudyKind::DemOnly)
       cost.keypoints = std::max(cost.keypoints, static_cast<int>(fem::buildFullModel(tool).keypoint_nodes.size()));
   if (has_soil) {
-    cost.dem_step_s = demStep(s);
+    cost.dem_step_s = study::demStepDividing(demStep(s), s.fem.dt_s);  // the step both backends run (one clock)
     cost.dem_steps = wholeSteps(cost.simulated_s, *cost.dem_step_s);
     cost.particles = builtin::estimatedParticleCount(s.soil);
     const double speed = s.dem.backend == "liggghts"

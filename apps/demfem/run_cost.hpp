@@ -3,16 +3,17 @@
 // ("Tests and benchmark"), docs/liggghts-backend.md and docs/fem.md ("Measured"), which enter the
 // code only in run_cost.cpp.
 //
-// - FEM steps: the insertion (depth plus one largest particle diameter of clearance at the
-//   insertion speed; a cone: at its velocity) and the drag (stroke / velocity), in whole FEM steps;
-//   a weight drop: duration / dt. DEM steps: the same simulated time at the DEM step.
+// - FEM steps: the tool motion plan's (study/tool_motion.hpp: insertion and drag in whole FEM
+//   steps; the longest of the tools); a weight drop: duration / dt. DEM steps: the same simulated
+//   time at the DEM step.
 // - DEM step: the study's (dem.dt_s, or dem.dt_fraction of its criterion's critical step on the
-//   study's materials, bin walls and smallest particle, as the built-in backend computes it).
+//   study's materials, bin walls and smallest particle, as the built-in backend computes it),
+//   shortened to divide the FEM step (study::demStepDividing).
 // - Particles: builtin::estimatedParticleCount (bin volume below the fill, packing, sizes).
 // - Wall time: DEM particle-steps at the measured speed for dem.threads (built-in) or one core
 //   (LIGGGHTS), plus the keypoint reduction and FEM steps scaled from the measured PMMA plate by
 //   (keypoints / 738)^2. A machine that is faster or less loaded than the 2-core one measured runs
-//   quicker; the estimate is within a factor of 2 on that machine (docs/architecture.md).
+//   quicker.
 #pragma once
 
 #include "demfem/study/study.hpp"
