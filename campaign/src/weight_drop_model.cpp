@@ -117,7 +117,7 @@ Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study
   fem::addLumpedMass(loaded, pan, drop.mass_kg / n);
   const int free_count = static_cast<int>(loaded.freeDofs().size());
   const fem::Modes modes = fem::naturalModes(loaded, std::min(kModes, free_count / 2));
-  const fem::Sensors sensors(loaded, tool.constraints.sensor_from_top_m);
+  const fem::Sensors sensors(loaded, tool);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(loaded.dofCount());
   // Load-cell functional c on the reactions (the sensor is linear in them).
   Eigen::VectorXd cell = Eigen::VectorXd::Zero(loaded.dofCount());

@@ -206,7 +206,7 @@ struct CoupledDriver::Impl {
       return;
     }
     integrator_ = std::make_unique<ThreeLevelIntegrator>(*model_, dt_, RayleighDamping{tool_.fem.alpha_s, tool_.fem.beta_per_s});
-    sensors_ = std::make_unique<Sensors>(*model_, tool_.constraints.sensor_from_top_m);
+    sensors_ = std::make_unique<Sensors>(*model_, tool_);
   }
 
   adapter::RigidMotion motionOfStep(std::int64_t step, double plan_start_s) const {

@@ -50,7 +50,9 @@ double weighted(const std::vector<std::pair<int, double>>& weights, const Eigen:
 
 }  // namespace
 
-Sensors::Sensors(const ReducedModel& model, double sensor_from_top_m) : load_cell_z_dofs_(loadCellZDofs(model)) {
+Sensors::Sensors(const ReducedModel& model, const study::Tool& tool)
+    : load_cell_z_dofs_(loadCellZDofs(model)), gains_(tool.sensors) {
+  const double sensor_from_top_m = tool.constraints.sensor_from_top_m;
   const auto rows = rowsOf(model);
   if (rows.size() < 2) throw std::invalid_argument("sensors: the model needs at least two keypoint rows along y");
   const double top = rows.back().first;
@@ -76,7 +78,8 @@ Sensors::Sensors(const ReducedModel& model, double sensor_from_top_m) : load_cel
 SensorReadings Sensors::read(const Eigen::VectorXd& displacement, const Eigen::VectorXd& reactions) const {
   SensorReadings s;
   for (int dof : load_cell_z_dofs_) s.load_cell_N += reactions(dof);
-  s.deformation_mm = -1000 * weighted(sensor_z_weights_, displacement);
+  s.deformation_mm = -1000 * weighted(sensor_z_weights_, displacement) * gains_.deformation_gain;
+  s.load_cell_N *= gains_.force_gain;
   s.tip_tilt_deg = std::atan(-weighted(tip_slope_weights_, displacement)) * 180 / std::numbers::pi;
   return s;
 }

@@ -324,10 +324,21 @@ class StudyParser {
       if (clamp) tool.constraints.clamp_length_m = *clamp;
       if (load_cell) tool.constraints.load_cell_from_top_m = *load_cell;
       if (sensor) tool.constraints.sensor_from_top_m = *sensor;
+      tool.constraints.clamp_rotational_stiffness_Nm_per_rad =
+          deformable ? c.quantity("clamp_rotational_stiffness_Nm_per_rad", positive(), Need::Optional) : std::nullopt;
+      if (!deformable) c.forbid("clamp_rotational_stiffness_Nm_per_rad", "the tool is rigid (no FEM model to hold)");
       source.constraints_ok = clamp && load_cell && sensor && geometry_lengths_ok;
       c.finish();
     } else {
       t.forbid("constraints", "a penetrometer is rigid and has no clamp or sensors");
+    }
+    if (deformable) {
+      ObjectReader s = t.object("sensors", Need::Optional);
+      if (auto v = s.quantity("force_gain", positive(), Need::Optional)) tool.sensors.force_gain = *v;
+      if (auto v = s.quantity("deformation_gain", positive(), Need::Optional)) tool.sensors.deformation_gain = *v;
+      s.finish();
+    } else {
+      t.forbid("sensors", "sensor gains apply to the FEM tool's load cell and deformation sensor");
     }
     if (soil) {
       ObjectReader m = t.object("motion", Need::Required);

@@ -138,6 +138,13 @@ ordered_json toolJson(const Tool& tool, StudyKind kind) {
     put(c, "clamp_length_mm", tool.constraints.clamp_length_m);
     put(c, "load_cell_from_top_mm", tool.constraints.load_cell_from_top_m);
     put(c, "sensor_from_top_mm", tool.constraints.sensor_from_top_m);
+    if (tool.constraints.clamp_rotational_stiffness_Nm_per_rad)
+      put(c, "clamp_rotational_stiffness_Nm_per_rad", *tool.constraints.clamp_rotational_stiffness_Nm_per_rad);
+  }
+  if (tool.fem.deformable) {
+    ordered_json& s = out["sensors"];
+    put(s, "force_gain", tool.sensors.force_gain);
+    put(s, "deformation_gain", tool.sensors.deformation_gain);
   }
   if (hasSoil(kind)) {
     ordered_json& m = out["motion"];

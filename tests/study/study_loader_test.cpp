@@ -359,3 +359,27 @@ TEST_CASE("external meshes and matrices must exist; matrices carry the material"
   REQUIRE(matrices.size() == 4);
   for (const Issue& i : matrices) CHECK(i.message.find("already contain") != std::string::npos);
 }
+
+TEST_CASE("the model extensions a diagnosis adds are study keys with ranges, absent = today's model", "[study]") {
+  const Study plain = parseStudy(paper("weight_drop_1kg.json").dump(), "weight_drop_1kg.json");
+  CHECK_FALSE(plain.tools[0].constraints.clamp_rotational_stiffness_Nm_per_rad);
+  CHECK(plain.tools[0].sensors.force_gain == 1.0);
+  CHECK(plain.tools[0].sensors.deformation_gain == 1.0);
+  json doc = paper("weight_drop_1kg.json");
+  doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 25.0;
+  doc["tools"][0]["sensors"] = {{"force_gain", 0.95}, {"deformation_gain", 1.1}};
+  doc["tools"][0]["fem"]["beta_per_s"] = 0.4;
+  const Study extended = parseStudy(doc.dump(), "extended.json");
+  CHECK(extended.tools[0].constraints.clamp_rotational_stiffness_Nm_per_rad == 25.0);
+  CHECK(extended.tools[0].sensors.force_gain == 0.95);
+  CHECK(extended.tools[0].sensors.deformation_gain == 1.1);
+  CHECK(parseStudy(toJson(extended).dump(), "extended.json") == extended);
+  doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 0;
+  requireSingleIssue(doc, "/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", "must be > 0, got 0");
+  doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 25.0;
+  doc["tools"][0]["sensors"]["force_gain"] = -1;
+  requireSingleIssue(doc, "/tools/0/sensors/force_gain", "must be > 0, got -1");
+  json rigid = paper("s235_dem_18.json");
+  rigid["tools"][0]["sensors"] = {{"force_gain", 0.95}};
+  requireSingleIssue(rigid, "/tools/0/sensors", "does not apply");
+}
