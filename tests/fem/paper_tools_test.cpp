@@ -160,7 +160,7 @@ TEST_CASE("the PMMA tool's load-cell influence coefficients split 10 N on the ti
   const study::Tool tool = testing::pmmaTool();
   const ReducedModel model = reduce(buildPlateModel(tool));
   const Eigen::VectorXd c = loadCellInfluence(model);
-  const Sensors sensors(model, tool.constraints.sensor_from_top_m);
+  const Sensors sensors(model, tool);
   const auto staticLoadCell = [&](const Eigen::VectorXd& f) {
     const StaticSolution s = solveStatic(model, f);
     return sensors.read(s.displacement, s.reaction).load_cell_N;
