@@ -160,7 +160,8 @@ struct LocalMinimum {
 
 class Search {
  public:
-  Search(Evaluator& evaluator, const CalibrationOptions& options, int n) : evaluator_(evaluator), options_(options), n_(n) {}
+  Search(Evaluator& evaluator, const CalibrationOptions& options, int n, Clock::time_point begin)
+      : evaluator_(evaluator), options_(options), n_(n), begin_(begin) {}
 
   LocalMinimum run(int start, const std::vector<double>& x0) {
     start_ = start;
@@ -223,7 +224,7 @@ class Search {
   nlopt::opt* opt_ = nullptr;
   std::exception_ptr error_;
   double best_ = std::numeric_limits<double>::infinity();
-  Clock::time_point begin_ = Clock::now();
+  Clock::time_point begin_;  // of the calibration (elapsed and eta include the first evaluation)
 };
 
 // One-sigma widths in optimiser coordinates from the Gauss-Newton curvature at x (contract).
@@ -298,7 +299,7 @@ CalibrationResult calibrate(const CalibrationProblem& problem, Model& model, con
 
   std::vector<double> initial_x;
   for (int i = 0; i < n; ++i) initial_x.push_back(specs[i].toUnit(initial[i]));
-  Search search(evaluator, options, n);
+  Search search(evaluator, options, n, begin);
   std::vector<LocalMinimum> found;
   for (int s = 0; s < std::max(1, options.starts); ++s) found.push_back(search.run(s, startPoint(s, initial_x)));
   const LocalMinimum best = *std::min_element(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.chi2 < b.chi2; });

@@ -9,7 +9,8 @@
 // kModes; the others answer the step load quasi-statically (static correction u_res = K^-1 f -
 // sum_j phi_j g_j / w_j^2, present from the first step), which keeps the static solution exact.
 // Scaling: K_r = (E / E_ref) K_r,ref, so w^2, the load-cell stiffness terms and 1/u_res scale by
-// E / E_ref while the mode shapes stay.
+// E / E_ref while the mode shapes stay. A compliant clamp's ground springs (fem/model.hpp) do not
+// scale with E: with them the modes are computed for each E.
 #include "demfem/campaign/model.hpp"
 
 #include "demfem/fem/model.hpp"
@@ -108,12 +109,21 @@ std::vector<int> panDofs(const fem::ReducedModel& model, const study::WeightDrop
   return dofs;
 }
 
-Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study::WeightDrop& drop) {
+// K_r at E = scale * E_ref: the material part scales, the compliant clamp's springs do not.
+void scaleMaterialStiffness(fem::ReducedModel& model, double scale) {
+  for (const auto& [dof, k] : model.constraints.springs) model.K(dof, dof) -= k;
+  model.K *= scale;
+  for (const auto& [dof, k] : model.constraints.springs) model.K(dof, dof) += k;
+}
+
+// `material_scale`: E / E_ref built into the basis (1 when the caller scales it, see run()).
+Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study::WeightDrop& drop, double material_scale) {
   const std::vector<int> pan = panDofs(reduction.model, drop);
   const auto n = static_cast<double>(pan.size());
   Eigen::VectorXd load = Eigen::VectorXd::Zero(reduction.model.dofCount());
   for (int dof : pan) load(dof) = -drop.mass_kg * fem::kStandardGravity_m_s2 / n;  // as fem::simulateWeightDrop
   fem::ReducedModel loaded = reduction.model;
+  if (material_scale != 1) scaleMaterialStiffness(loaded, material_scale);
   fem::addLumpedMass(loaded, pan, drop.mass_kg / n);
   const int free_count = static_cast<int>(loaded.freeDofs().size());
   const fem::Modes modes = fem::naturalModes(loaded, std::min(kModes, free_count / 2));
@@ -213,10 +223,16 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
   const auto reduction = impl_->reductions.get(tool_key, [&] {
     return Reduction{fem::reduce(fem::buildFullModel(tool)), tool.fem.youngs_Pa};
   });
-  const std::string basis_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
-  const auto basis = impl_->bases.get(basis_key, [&] { return makeBasis(*reduction, tool, drop); });
+  // The modes scale with E unless the clamp's springs (not scaled) are part of K: then the basis is
+  // built for this E (alpha and beta still reuse it).
+  const double scale = tool.fem.youngs_Pa / reduction->E_ref_Pa;
+  const bool springs = !reduction->model.constraints.springs.empty();
+  nlohmann::json basis_id = {tool_key, drop.mass_kg, drop.pan_rows_from_tip_m};
+  if (springs) basis_id.push_back(tool.fem.youngs_Pa);
+  const std::string basis_key = basis_id.dump();
+  const auto basis = impl_->bases.get(basis_key, [&] { return makeBasis(*reduction, tool, drop, springs ? scale : 1.0); });
   const auto steps = static_cast<long>(std::llround(drop.duration_s / study.fem.dt_s));
-  analysis::Recording rec = integrate(*basis, tool.fem.youngs_Pa / reduction->E_ref_Pa, tool, study.fem.dt_s, steps);
+  analysis::Recording rec = integrate(*basis, springs ? 1.0 : scale, tool, study.fem.dt_s, steps);
   rec.key = key;
   rec.csv_path = "model run " + key.label();
   return rec;

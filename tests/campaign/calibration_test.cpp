@@ -112,3 +112,31 @@ TEST_CASE("recordings of a case the study cannot run are an error naming the cas
   CHECK_THROWS_WITH(campaign::calibrate(problem, model, quickOptions({})),
                     Catch::Matchers::Contains("strip, 30 mm depth") && Catch::Matchers::Contains("needs a coupled or dem-only study"));
 }
+
+TEST_CASE("the layered-soil preset fits, depth by depth, the deepest layer the tool reaches", "[campaign]") {
+  const TempDir dir("layered");
+  for (double depth : {25.0, 8.0, 15.0}) {
+    analysis::SoilBinTruth soil;
+    soil.tool = "tool", soil.depth_mm = depth;
+    analysis::writeSyntheticRecording(analysis::makeSoilBinRecording(soil, analysis::RecordingFormat::Calibrated),
+                                      dir.path() / ("d" + std::to_string(static_cast<int>(depth)) + ".csv"));
+  }
+  const std::filesystem::path file = std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data/tiny_bin.json";
+  std::ifstream in(file);
+  const auto study = nlohmann::ordered_json::parse(in);
+  const auto stages = campaign::layeredSoilPreset(study, file.string(), analysis::readRecordings({dir.path()}));
+  // Layers: layer1 0-10 mm, layer2 10-30 mm. 8 mm reaches layer1, 15 mm layer2; at 25 mm layer2
+  // is still the deepest and was fitted already.
+  REQUIRE(stages.size() == 2);
+  CHECK(stages[0].cases.size() == 1);
+  CHECK(stages[0].cases[0].depth_mm == 8);
+  CHECK(stages[1].cases[0].depth_mm == 15);
+  REQUIRE(stages[0].parameters.size() == 2);
+  CHECK(study.at(nlohmann::ordered_json::json_pointer(stages[0].parameters[0].pointer.substr(0, stages[0].parameters[0].pointer.rfind('/')) +
+                                                      "/materials")) == nlohmann::ordered_json({"layer1", "layer1"}));
+  CHECK(stages[0].parameters[0].label() == "static_friction");
+  CHECK(stages[0].parameters[1].label() == "rolling_friction");
+  CHECK(study.at(nlohmann::ordered_json::json_pointer(stages[1].parameters[0].pointer.substr(0, stages[1].parameters[0].pointer.rfind('/')) +
+                                                      "/materials")) == nlohmann::ordered_json({"layer2", "layer2"}));
+  CHECK_THROWS_WITH(campaign::weightDropPreset(study, analysis::readRecordings({dir.path()})), Catch::Matchers::Contains("not weight-drop"));
+}

@@ -13,7 +13,8 @@
 //   (K_r, M_r + weight) are kept per (study without E, alpha, beta; mass): a change of E scales K_r
 //   and every squared natural frequency by the same factor, alpha and beta only change the modal
 //   damping (Eq 4 keeps the modes uncoupled), so a re-evaluation is one scalar three-level
-//   recursion (Eq 5-10) per mode. Equal to fem::simulateWeightDrop up to the transient of the modes
+//   recursion (Eq 5-10) per mode (with a compliant clamp, whose springs do not scale with E, the
+//   modes are recomputed for each E). Equal to fem::simulateWeightDrop up to the transient of the modes
 //   beyond the lowest 40 (static correction keeps the static response exact), except that the record
 //   starts 0.1 s earlier, at rest, like a measured one: the weight is hung at t = 0.1 s (a step fit
 //   needs the baseline before the step).
