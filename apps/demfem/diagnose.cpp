@@ -77,8 +77,6 @@ void addDiagnoseCommand(CLI::App& app) {
   auto o = std::make_shared<DiagnoseOptions>();
   o->analysis.out_dir = "diagnosis";
   auto& s = o->settings;
-  s.calibration.starts = 2;
-  s.calibration.max_evaluations = 60;
   auto* cmd = app.add_subcommand("diagnose",
                                  "Say what the simulation gets wrong against recordings, name the most likely cause, fit the "
                                  "extended model and measure the gain on held-out cases");
@@ -95,6 +93,9 @@ void addDiagnoseCommand(CLI::App& app) {
   cmd->add_option("--starts", s.calibration.starts, "Optimiser starts per fit")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--max-evaluations", s.calibration.max_evaluations, "Objective evaluations per start")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--x-tolerance", s.calibration.x_tolerance, "Optimiser tolerance, as a fraction of each parameter's bounds")
+      ->check(CLI::Range(1e-9, 0.1))
       ->capture_default_str();
   cmd->add_option("--jobs", s.calibration.jobs, "Cases run concurrently")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress on stderr");

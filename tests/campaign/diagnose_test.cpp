@@ -39,9 +39,7 @@ campaign::Diagnosis diagnoseBeam(const BeamTool& beam, const std::string& name) 
   const auto recordings = beamRecordings(beam, dir.path());
   std::ifstream in(kStudy);
   const auto study = nlohmann::ordered_json::parse(in);
-  campaign::DiagnosisSettings settings;
-  settings.calibration.starts = 2;
-  settings.calibration.max_evaluations = 60;
+  const campaign::DiagnosisSettings settings;
   campaign::WeightDropModel model;
   campaign::Diagnosis d = campaign::diagnose(study, kStudy.string(), recordings, model, settings);
   INFO(campaign::toJson(d, settings, "extended_study.json").dump(1));
