@@ -106,6 +106,8 @@ void addDiagnoseCommand(CLI::App& app) {
       runAnalysis([&] { run(*o, json_target); });
     } catch (const campaign::ArgumentError& e) {
       throw InputError(e.what());
+    } catch (const campaign::Interrupted& e) {
+      throw Interrupted(e.what());
     }
   });
 }

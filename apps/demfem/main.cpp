@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   demfem::cli::addDepositCommand(app);
   demfem::cli::addEvaluateCommand(app);
   demfem::cli::addCompareCommand(app);
+  demfem::cli::addCalibrateCommand(app);
   demfem::cli::addDiagnoseCommand(app);
   return demfem::cli::runApp(app, argc, argv);
 }

@@ -21,6 +21,11 @@ Point3 ToolMotionPlan::positionAt(double t_s) const {
   return drag.at(std::min(t_s, drag_end));
 }
 
+double demStepDividing(double dem_dt_s, double fem_dt_s) {
+  if (!(fem_dt_s > 0)) return dem_dt_s;
+  return fem_dt_s / std::ceil(fem_dt_s / dem_dt_s - 1e-9);
+}
+
 ToolMotionPlan planToolMotion(const Study& study, const Tool& tool) {
   const std::string what = "tool '" + tool.name + "' of study '" + study.name + "'";
   if (!hasSoil(study.kind)) throw std::invalid_argument(what + ": the study's kind moves no tool through soil");

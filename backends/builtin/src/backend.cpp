@@ -37,9 +37,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
       sim_.setMeshMotion(m, study::planToolMotion(study, tool).start_m, {0, 0, 0}, 0);
     }
     // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
-    double dt = studyTimeStep(sim_, study.dem);
-    if (study.fem.dt_s > 0) dt = study.fem.dt_s / std::ceil(study.fem.dt_s / dt - 1e-9);
-    sim_.setTimeStep(dt);
+    sim_.setTimeStep(study::demStepDividing(studyTimeStep(sim_, study.dem), study.fem.dt_s));
     if (study.output.vtk_every > 0) {
       vtk_interval_ = study.output.vtk_every * study.fem.dt_s;
       next_vtk_ = sim_.time();

@@ -296,7 +296,7 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
 
   InputDeck deck;
   deck.atom_type_count = static_cast<int>(n_types);
-  deck.time_step_s = demTimeStep(study);
+  deck.time_step_s = study::demStepDividing(demTimeStep(study), study.fem.dt_s);  // one clock with the FEM
 
   const double w = soil.bin_width_m;
   const double r_max = soil.diameter_max_m / 2;

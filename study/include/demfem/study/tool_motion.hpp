@@ -51,6 +51,11 @@ struct ToolMotionPlan {
   Point3 positionAt(double t_s) const;
 };
 
+// One clock for both sides: the largest DEM step not above `dem_dt_s` that divides `fem_dt_s` into
+// whole steps, so that simulate(dt_FEM) ends exactly on the FEM step (both backends use it).
+// `fem_dt_s` <= 0 (no FEM step): `dem_dt_s` unchanged.
+double demStepDividing(double dem_dt_s, double fem_dt_s);
+
 // The plan of `tool` (one of study.tools) in `study` (validated by loadStudy). Throws
 // std::invalid_argument for a kind without soil or a non-positive fem.dt_s, velocity or stroke.
 ToolMotionPlan planToolMotion(const Study& study, const Tool& tool);

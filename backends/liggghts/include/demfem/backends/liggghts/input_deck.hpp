@@ -43,7 +43,7 @@ struct InputDeck {
   std::vector<std::string> tool_clearance;  // after settling: remove particles in the tools' way
   std::vector<std::string> tools;           // tool meshes, their wall and movers
   int atom_type_count = 0;
-  double time_step_s = 0;
+  double time_step_s = 0;               // demTimeStep() shortened to divide fem.dt_s (study/tool_motion.hpp)
   double insertion_top_m = 0;           // top of the insertion stack (y)
 };
 
