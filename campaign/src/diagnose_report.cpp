@@ -1,6 +1,7 @@
 // Outputs of a diagnosis (diagnose.hpp): JSON, report.md, extended_study.json, before/after plots.
 #include "demfem/campaign/diagnose.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 

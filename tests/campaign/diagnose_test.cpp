@@ -1,5 +1,5 @@
 // Hidden-effect tests of the diagnosis (docs/diagnosis.md): calibration-weight recordings made by an
-// independent Euler-Bernoulli beam model of the tool (beam_weight_drop.hpp, no code of the
+// independent Euler-Bernoulli beam model of the tool (the fixture of this folder, no code of the
 // project's FEM) with one effect the diagnosis is not told about, written as raw DAQ recordings
 // (quantised, noisy, with a resting baseline). The diagnosis must name the effect and its
 // extension must cut the held-out error by at least 50 %; the beam with no effect (the project's
