@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 
 namespace demfem::analysis {
 namespace {
@@ -131,8 +132,25 @@ EvaluationResult evaluate(const std::vector<Recording>& recordings, const Analys
   return result;
 }
 
-ComparisonResult compare(const std::vector<Recording>& measured, const std::vector<Recording>& simulated, const AnalysisSettings& settings) {
+std::optional<std::string> singleToolMatch(const std::vector<Recording>& measured, const std::vector<Recording>& simulated) {
+  const auto tools = [](const std::vector<Recording>& recordings) {
+    std::set<std::string> names;
+    for (const auto& r : recordings) names.insert(r.key.tool);
+    return names;
+  };
+  const std::set<std::string> measured_tools = tools(measured), simulated_tools = tools(simulated);
+  if (measured_tools.size() != 1 || simulated_tools.size() != 1 || measured_tools == simulated_tools) return std::nullopt;
+  return *measured_tools.begin();
+}
+
+ComparisonResult compare(const std::vector<Recording>& measured, const std::vector<Recording>& simulated_as_named,
+                         const AnalysisSettings& settings) {
   ComparisonResult result;
+  std::vector<Recording> simulated = simulated_as_named;
+  if (const auto tool = singleToolMatch(measured, simulated)) {
+    result.simulated_tool_matched_as = {simulated.front().key.tool, *tool};
+    for (auto& r : simulated) r.key.tool = *tool;
+  }
   result.measured = evaluate(measured, settings);
   result.simulated = evaluate(simulated, settings);
 

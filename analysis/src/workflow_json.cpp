@@ -142,6 +142,10 @@ json toJson(const EvaluationResult& result, const AnalysisSettings& settings) {
 json toJson(const ComparisonResult& result, const AnalysisSettings& settings) {
   json j;
   j["settings"] = settingsJson(settings);
+  j["simulated_tool_matched_as"] = result.simulated_tool_matched_as
+                                       ? json{{"simulated", result.simulated_tool_matched_as->first},
+                                              {"measured", result.simulated_tool_matched_as->second}}
+                                       : json(nullptr);
   j["soil_bin_cases"] = json::array();
   for (const auto& c : result.soil_bin) {
     json item = caseJson(c.key);

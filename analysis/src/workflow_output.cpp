@@ -399,6 +399,9 @@ void writeEvaluation(const EvaluationResult& result, const AnalysisSettings& set
 void writeComparison(const ComparisonResult& result, const AnalysisSettings& settings, StagedOutput& out, const GnuplotRenderer* renderer) {
   std::ostringstream md;
   md << "# Measured against simulated\n\n" << settingsMarkdown(settings);
+  if (const auto& renamed = result.simulated_tool_matched_as)
+    md << "The simulated tool '" << renamed->first << "' is compared with the measured tool '" << renamed->second
+       << "' (one tool on each side: cases matched by depth or mass).\n\n";
   if (!result.unmatched_cases.empty()) {
     md << "Cases without a counterpart (not compared):\n\n";
     for (const auto& u : result.unmatched_cases) md << "- " << u << "\n";

@@ -4,6 +4,7 @@
 #include "demfem/adapter/test_backends.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/cli/progress.hpp"
 #include "demfem/protocol/transport.hpp"
 #include "demfem/study/study.hpp"
 #if DEMFEM_WITH_LIGGGHTS
@@ -28,6 +29,7 @@ struct Options {
   std::string output_dir;
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
+  int threads = 0;            // 0: the study's dem.threads
   adapter::TestLoad load;
 };
 
@@ -41,7 +43,15 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::s
   if (std::find(tests.begin(), tests.end(), backend) != tests.end())
     return adapter::makeTestBackend(backend, study ? study->tools : std::vector<study::Tool>{study::Tool{}}, o.load);
   if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
-  if (backend == "builtin") return builtin::makeBackend(*study);
+  if (backend == "builtin") {
+    cli::Progress deposition("deposition", true);
+    auto api = builtin::makeBackend(*study, [&deposition](double fraction, const std::string& stage_line) {
+      if (!stage_line.empty()) std::cerr << "deposition: " << stage_line << std::endl;
+      deposition.update(fraction);
+    });
+    deposition.finish();
+    return api;
+  }
 #if DEMFEM_WITH_LIGGGHTS
   if (backend == "liggghts") return liggghts::makeBackend(*study);
 #else
@@ -61,6 +71,7 @@ void run(const Options& o) {
   }
   std::optional<study::Study> study;
   if (!o.study_file.empty()) study = study::loadStudy(o.study_file);
+  if (o.threads > 0 && study) study->dem.threads = o.threads;
   if (study && !o.output_dir.empty()) study->output.directory = o.output_dir;
   const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : "builtin";
 #if DEMFEM_WITH_LIGGGHTS
@@ -89,11 +100,11 @@ void run(const Options& o) {
     { std::ofstream(tmp) << socket.endpoint() << '\n'; }
     std::filesystem::rename(tmp, o.endpoint_file);
   }
-  std::cout << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
+  std::cerr << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
             << (security ? " (CurveZMQ)" : "") << std::endl;
   adapter::Server server(*api);
   server.serve(socket, {millis(o.connect_timeout_s), millis(idle_s)});
-  std::cout << "demfem-dem: shut down by the client" << std::endl;
+  std::cerr << "demfem-dem: shut down by the client" << std::endl;
 }
 
 }  // namespace
@@ -114,6 +125,8 @@ int main(int argc, char** argv) {
   app.add_option("--curve-keys", o.curve_keys, "CurveZMQ key directory (server.pub, server.secret, client.pub)")
       ->check(CLI::ExistingDirectory);
   app.add_option("--make-curve-keys", o.make_curve_keys, "Write a fresh server and client key pair to DIR and exit");
+  app.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--endpoint-file", o.endpoint_file, "Write the bound endpoint (with the chosen port) to FILE");
   app.add_option("--output", o.output_dir, "Directory of the DEM's own files (builtin: VTK); default: the study's output.directory");
   app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")

@@ -1,17 +1,17 @@
 // `demfem-fem run STUDY --connect ENDPOINT`: the coupled cycle of Fig. 3 against a DEM server.
 #include "demfem/adapter/remote_proxy.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/cli/progress.hpp"
 #include "demfem/fem/coupled_driver.hpp"
 #include "demfem/protocol/transport.hpp"
 #include "demfem/study/study.hpp"
-
-#include <unistd.h>
 
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 namespace demfem::cli {
 
@@ -33,48 +33,23 @@ struct RunOptions {
   bool quiet = false;
 };
 
-std::string clock(double seconds) {
-  const long s = std::lround(std::max(0.0, seconds));
-  char text[32];
-  std::snprintf(text, sizeof text, "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
-  return text;
+// The text summary of a run (standard output; not with --json -).
+void printSummary(const study::Study& study, const fem::CoupledRunSummary& summary, const std::filesystem::path& output_dir) {
+  if (summary.complete)
+    std::printf("coupled run of '%s' against DEM backend '%s' complete (%s tool)\n", study.name.c_str(),
+                summary.backend.c_str(), summary.rigid_tool ? "rigid" : "deformable");
+  else
+    std::printf("coupled run of '%s' against DEM backend '%s' %s (%s tool): outputs marked incomplete\n",
+                study.name.c_str(), summary.backend.c_str(), summary.incomplete_reason.c_str(),
+                summary.rigid_tool ? "rigid" : "deformable");
+  std::printf("  FEM steps            %lld of %lld (%lld in the drag phase)\n", static_cast<long long>(summary.steps),
+              static_cast<long long>(summary.planned_steps), static_cast<long long>(summary.drag_steps));
+  std::printf("  simulated time       %.6g s\n", summary.simulated_time_s);
+  std::printf("  wall time            %.3g s\n", summary.wall_time_s);
+  std::printf("  mean load-cell force %.6g N (max %.6g N)\n", summary.mean_force_N, summary.max_force_N);
+  std::printf("  final deformation    %.6g mm, tilt %.6g deg\n", summary.final_deformation_mm, summary.final_tilt_deg);
+  std::printf("  outputs              %s\n", output_dir.string().c_str());
 }
-
-// Progress on stderr: a redrawn bar on a terminal, a plain line every 10 % (or 30 s) otherwise.
-class ProgressReporter {
- public:
-  ProgressReporter() : tty_(isatty(STDERR_FILENO) == 1) {}
-
-  void operator()(const fem::CoupledProgress& p) {
-    const auto now = std::chrono::steady_clock::now();
-    const double fraction = p.total_steps ? static_cast<double>(p.step) / static_cast<double>(p.total_steps) : 1.0;
-    const bool last = p.step == p.total_steps;
-    char line[200];
-    if (tty_) {
-      if (!last && now - last_ < std::chrono::milliseconds(100)) return;
-      const int width = 30, filled = static_cast<int>(fraction * width);
-      std::snprintf(line, sizeof line, "\r[%s%s] %5.1f %%  t = %.4f / %.4f s  %.0f steps/s  %s left ",
-                    std::string(static_cast<std::size_t>(filled), '#').c_str(),
-                    std::string(static_cast<std::size_t>(width - filled), '.').c_str(), 100 * fraction, p.time_s,
-                    p.end_time_s, p.steps_per_s, clock(p.eta_s).c_str());
-      std::cerr << line << (last ? "\n" : "") << std::flush;
-    } else {
-      const int decile = static_cast<int>(fraction * 10);
-      if (!last && decile == decile_ && now - last_ < std::chrono::seconds(30)) return;
-      decile_ = decile;
-      std::snprintf(line, sizeof line, "progress: step %lld/%lld (%.1f %%), t = %.4f s of %.4f s, %.0f steps/s, %s left",
-                    static_cast<long long>(p.step), static_cast<long long>(p.total_steps), 100 * fraction, p.time_s,
-                    p.end_time_s, p.steps_per_s, clock(p.eta_s).c_str());
-      std::cerr << line << std::endl;
-    }
-    last_ = now;
-  }
-
- private:
-  bool tty_;
-  int decile_ = -1;
-  std::chrono::steady_clock::time_point last_{};
-};
 
 void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
   const study::Study study = study::loadStudy(o.study_file);
@@ -96,10 +71,19 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
   options.checkpoint_every = o.checkpoint_every;
   options.resume = o.resume;
   options.stop_requested = [] { return g_stop_signal != 0; };
-  ProgressReporter progress;
-  if (!o.quiet) options.on_progress = [&progress](const fem::CoupledProgress& p) { progress(p); };
+  Progress reduction("keypoint reduction", !o.quiet);
+  options.on_reduction_progress = [&reduction](double fraction) { reduction.update(fraction); };
+  std::optional<Progress> coupled;  // started once the model is built
+  options.on_progress = [&coupled](const fem::CoupledProgress& p) {
+    char detail[96];
+    std::snprintf(detail, sizeof detail, "step %lld/%lld, t = %.4f of %.4f s, %.0f steps/s", static_cast<long long>(p.step),
+                  static_cast<long long>(p.total_steps), p.time_s, p.end_time_s, p.steps_per_s);
+    coupled->update(p.total_steps ? static_cast<double>(p.step) / static_cast<double>(p.total_steps) : 1.0, detail);
+  };
 
   fem::CoupledDriver driver(study, options);  // FEM model first: the DEM server's idle clock is not running yet
+  reduction.finish();
+  coupled.emplace("coupled run", !o.quiet);
   adapter::RemoteProxy dem(remote);
   fem::CoupledRunSummary summary;
   try {
@@ -115,24 +99,13 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
       std::signal(signal, SIG_DFL);
       std::raise(signal);  // exit by the signal, as a shell expects
     }
-    throw std::runtime_error(std::string(e.what()) + " (outputs in " + options.output_dir.string() + " marked incomplete)");
+    throw std::runtime_error(std::string(e.what()) + " (outputs in " + options.output_dir.string() +
+                             "; their sensors.json says they are incomplete)");
   }
   dem.shutdown();
+  coupled->finish();
 
-  if (summary.complete)
-    std::printf("coupled run of '%s' against DEM backend '%s' complete (%s tool)\n", study.name.c_str(),
-                summary.backend.c_str(), summary.rigid_tool ? "rigid" : "deformable");
-  else
-    std::printf("coupled run of '%s' against DEM backend '%s' %s (%s tool): outputs marked incomplete\n",
-                study.name.c_str(), summary.backend.c_str(), summary.incomplete_reason.c_str(),
-                summary.rigid_tool ? "rigid" : "deformable");
-  std::printf("  FEM steps            %lld of %lld (%lld in the drag phase)\n", static_cast<long long>(summary.steps),
-              static_cast<long long>(summary.planned_steps), static_cast<long long>(summary.drag_steps));
-  std::printf("  simulated time       %.6g s\n", summary.simulated_time_s);
-  std::printf("  wall time            %.3g s\n", summary.wall_time_s);
-  std::printf("  mean load-cell force %.6g N (max %.6g N)\n", summary.mean_force_N, summary.max_force_N);
-  std::printf("  final deformation    %.6g mm, tilt %.6g deg\n", summary.final_deformation_mm, summary.final_tilt_deg);
-  std::printf("  outputs              %s\n", options.output_dir.string().c_str());
+  if (textOnStdout(json_target)) printSummary(study, summary, options.output_dir);
   writeJson(json_target, {{"study", study.name},
                           {"backend", summary.backend},
                           {"rigid_tool", summary.rigid_tool},

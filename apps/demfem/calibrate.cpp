@@ -4,6 +4,7 @@
 #include "commands.hpp"
 
 #include "demfem/campaign/calibration.hpp"
+#include "demfem/cli/progress.hpp"
 
 #include <atomic>
 #include <csignal>
@@ -45,16 +46,6 @@ std::vector<campaign::Stage> stagesOf(const CalibrateOptions& o, const nlohmann:
   return {stage};
 }
 
-// At most one progress line per second (and at every new start).
-void progress(const campaign::CalibrationProgress& p) {
-  static double last_s = -1;
-  static int last_start = 0;
-  if (p.start == last_start && p.elapsed_s < last_s + 1) return;
-  last_s = p.elapsed_s, last_start = p.start;
-  std::fprintf(stderr, "\rcalibrate: evaluation %d (budget %d), start %d/%d, best chi2 %.4g, %.0f s elapsed, at most %.0f s left   ",
-               p.evaluation, p.max_evaluations, p.start, p.starts, p.best_chi2, p.elapsed_s, p.eta_s);
-}
-
 void run(CalibrateOptions& o, const std::string& json_target) {
   finishAnalysisOptions(o.analysis);
   const nlohmann::ordered_json study_json = readStudyJson(o.study_file);
@@ -67,20 +58,26 @@ void run(CalibrateOptions& o, const std::string& json_target) {
   c.objective.soil_deformation = study.kind != study::StudyKind::DemOnly && study.tools.front().fem.deformable;
   c.kind = study.kind == study::StudyKind::WeightDrop ? campaign::ObjectiveKind::Smooth : campaign::ObjectiveKind::Noisy;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
-  if (!o.quiet) c.on_progress = progress;
+  Progress progress("calibrate", !o.quiet);
+  c.on_progress = [&progress](const campaign::CalibrationProgress& p) {
+    char detail[128];
+    std::snprintf(detail, sizeof detail, "evaluation %d of at most %d, start %d/%d, best chi2 %.4g", p.evaluation, p.max_evaluations,
+                  p.start, p.starts, p.best_chi2);
+    progress.update(p.max_evaluations > 0 ? static_cast<double>(p.evaluation) / p.max_evaluations : 0.0, detail);
+  };
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   c.stop_requested = [] { return g_stop.load(); };
   const auto model = campaign::makeModel(study);
   const auto result = campaign::calibrateStages(study_json, o.study_file, recordings, stages, *model, c);
-  if (!o.quiet) std::fputc('\n', stderr);
+  progress.finish();
 
   analysis::StagedOutput out(o.analysis.out_dir);
   const analysis::GnuplotRenderer renderer(o.analysis.gnuplot);
   campaign::writeCalibration(result, c, out, o.analysis.no_plots ? nullptr : &renderer);
   out.commit();
   writeJson(json_target, campaign::toJson(result, c));
-  if (json_target == "-") return;
+  if (!textOnStdout(json_target)) return;
   for (const auto& r : result.results) {
     for (const auto& p : r.parameters) {
       if (p.value) std::printf("%s = %.6g +- %.2g\n", p.spec.pointer.c_str(), *p.value, p.std_dev);

@@ -24,7 +24,7 @@ void addCompareCommand(CLI::App& app) {
   addAnalysisOptions(*cmd, options->analysis);
   cmd->add_option("--simulated-tool", options->simulated_tool,
                   "Treat every simulated recording as this tool (the FEM client's sidecar names the tool after the study's tool "
-                  "entry, e.g. \"tool\", while a measured sidecar says e.g. \"PMMA\")");
+                  "entry). Not needed when each side has one tool: cases are then matched by depth or mass");
   cmd->add_option("--fft-low-hz", options->analysis.settings.fft_low_Hz, "Lowest frequency of the power-law fits (default: common band)");
   cmd->add_option("--fft-high-hz", options->analysis.settings.fft_high_Hz, "Highest frequency of the power-law fits (default: common band)");
   std::string& json_target = addJsonOption(*cmd);
@@ -46,7 +46,9 @@ void addCompareCommand(CLI::App& app) {
       out.commit();
       writeJson(json_target, analysis::toJson(result, settings));
 
-      if (json_target != "-") {
+      if (textOnStdout(json_target)) {
+        if (const auto& renamed = result.simulated_tool_matched_as)
+          std::cout << "simulated tool '" << renamed->first << "' compared as '" << renamed->second << "' (one tool on each side)\n";
         for (const auto& c : result.soil_bin)
           std::cout << c.key.title() << ": force mean difference " << c.force_difference_percent << " %, deformation mean difference "
                     << c.deformation_difference_percent << " %, fitted deformation spectrum ratio " << c.deformation_spectrum.mean_fitted_ratio

@@ -3,6 +3,7 @@
 #include "commands.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "demfem/cli/progress.hpp"
 #include "demfem/study/study.hpp"
 
 #include <nlohmann/json.hpp>
@@ -21,6 +22,7 @@ struct DepositOptions {
   std::string soil_dir;
   int threads = 0;
   bool force = false;
+  bool quiet = false;
 };
 }  // namespace
 
@@ -35,13 +37,14 @@ void addDepositCommand(CLI::App& app) {
   cmd->add_option("--soil-dir", opt->soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
   cmd->add_option("--threads", opt->threads, "OpenMP threads (default: the study's /dem/threads)")->check(CLI::PositiveNumber);
   cmd->add_flag("--force", opt->force, "Deposit again even if the file exists");
+  cmd->add_flag("--quiet", opt->quiet, "No progress output");
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([opt, &json_target] {
     const study::Study s = study::loadStudy(opt->study_file);
     const std::filesystem::path dir =
         opt->soil_dir.empty() ? builtin::defaultSoilDirectory() : std::filesystem::path(opt->soil_dir);
     const auto file = builtin::soilFile(s, dir);
-    const bool text = json_target != "-";
+    const bool text = textOnStdout(json_target);
     nlohmann::json report{{"study", opt->study_file}, {"soil_file", file.string()}, {"soil_hash", study::soilHash(s)}};
     if (std::filesystem::exists(file) && !opt->force) {
       const auto soil = builtin::readSettledSoil(file);
@@ -54,9 +57,12 @@ void addDepositCommand(CLI::App& app) {
     const int threads = opt->threads > 0 ? opt->threads : s.dem.threads;
     builtin::DepositReport r;
     const auto start = std::chrono::steady_clock::now();
-    const auto soil = builtin::depositSoil(s, threads, r, [text](const std::string& line) {
-      if (text) std::cout << line << std::endl;
+    Progress progress("deposition", !opt->quiet);
+    const auto soil = builtin::depositSoil(s, threads, r, [&](double fraction, const std::string& stage_line) {
+      if (!stage_line.empty() && !opt->quiet) std::cerr << "deposition: " << stage_line << std::endl;
+      progress.update(fraction);
     });
+    progress.finish(std::to_string(r.particles) + " particles");
     builtin::writeSettledSoil(file, soil);
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (text)

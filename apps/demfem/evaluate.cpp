@@ -34,7 +34,7 @@ void addEvaluateCommand(CLI::App& app) {
       out.commit();
       writeJson(json_target, analysis::toJson(result, settings));
 
-      if (json_target != "-") {
+      if (textOnStdout(json_target)) {
         for (const auto& c : result.soil_bin_cases)
           std::cout << c.key.title() << ": " << c.repeats.size() << " repeat(s), force " << c.force_mean_N << " +- " << c.force_std_N
                     << " N, deformation " << c.deformation_mean_mm << " +- " << c.deformation_std_mm << " mm\n";

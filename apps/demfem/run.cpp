@@ -40,6 +40,7 @@ struct RunOptions {
   std::string backend;
   std::int64_t steps = 0;
   std::int64_t checkpoint_every = 0;
+  int threads = 0;
   bool resume = false;
   bool quiet = false;
 };
@@ -116,6 +117,8 @@ fs::path siblingExecutable(const std::string& name) {
 
 void runLocal(const RunOptions& o, const std::string& json_target) {
   const study::Study study = study::loadStudy(o.study_file);  // validate before starting anything
+  if (study.kind == study::StudyKind::WeightDrop)
+    throw InputError(o.study_file + ": a weight-drop study has no DEM side; run it with: demfem-fem weight-drop " + o.study_file);
   const fs::path dem_exe = siblingExecutable("demfem-dem"), fem_exe = siblingExecutable("demfem-fem");
   const fs::path work = fs::temp_directory_path() / ("demfem-run-" + std::to_string(getpid()));
   fs::create_directories(work);
@@ -132,6 +135,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   std::vector<std::string> dem_args{dem_exe.string(), "--study", o.study_file, "--bind", endpoint, "--endpoint-file",
                                     endpoint_file.string()};
   if (!o.backend.empty()) dem_args.insert(dem_args.end(), {"--backend", o.backend});
+  if (o.threads > 0) dem_args.insert(dem_args.end(), {"--threads", std::to_string(o.threads)});
   if (!o.output_dir.empty()) dem_args.insert(dem_args.end(), {"--output", o.output_dir});
   Child dem("demfem-dem", dem_args);
 
@@ -176,7 +180,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   if (forwarded) endBySignal(forwarded, work);
   if (!fem.succeeded() || !dem.succeeded())
     throw std::runtime_error("coupled run failed: demfem-fem " + fem.outcome() + ", demfem-dem " + dem.outcome() +
-                             " (see their messages above; outputs are marked incomplete)");
+                             " (see their messages above)");
 }
 
 }  // namespace
@@ -191,6 +195,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
   cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (outputs then marked incomplete)")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
+  cmd->add_option("--threads", o->threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");
   std::string& json = addJsonOption(*cmd);

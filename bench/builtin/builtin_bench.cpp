@@ -131,7 +131,9 @@ int main(int argc, char** argv) {
       } else {
         std::cerr << c.label << ": depositing " << file.string() << " (once)\n";
         DepositReport r;
-        settled = depositSoil(st, 2, r, [](const std::string& line) { std::cerr << line << '\n'; });
+        settled = depositSoil(st, 2, r, [](double, const std::string& line) {
+          if (!line.empty()) std::cerr << line << '\n';
+        });
         writeSettledSoil(file, settled);
       }
       // Insert the tool with this model (untimed, at 0.3 m/s, as the LIGGGHTS benchmark does, to keep it

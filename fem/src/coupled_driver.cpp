@@ -200,7 +200,7 @@ struct CoupledDriver::Impl {
   }
 
   void buildFem() {
-    model_ = std::make_unique<ReducedModel>(reduce(buildFullModel(tool_)));
+    model_ = std::make_unique<ReducedModel>(reduce(buildFullModel(tool_), options_.on_reduction_progress));
     if (rigid_) {
       load_cell_influence_ = loadCellInfluence(*model_);
       return;

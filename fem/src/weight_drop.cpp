@@ -60,7 +60,7 @@ SignalCharacteristics characterize(const std::vector<double>& values, double dt_
 }
 
 WeightDropResult simulateWeightDrop(const ReducedModel& model, const study::Tool& tool, const study::WeightDrop& drop,
-                                    double dt_s) {
+                                    double dt_s, const std::function<void(double)>& progress) {
   if (!(drop.mass_kg > 0)) throw std::invalid_argument("weight drop: mass must be > 0 kg");
   if (!(drop.duration_s > 0)) throw std::invalid_argument("weight drop: duration must be > 0 s");
   const double tip = model.keypoints.col(1).minCoeff();
@@ -94,6 +94,7 @@ WeightDropResult simulateWeightDrop(const ReducedModel& model, const study::Tool
     integrator.step(load);  // the weight hangs from t = dt on
     const SensorReadings r = sensors.read(integrator.displacement(), integrator.reactions());
     result.samples.push_back({integrator.time(), r.load_cell_N, r.deformation_mm});
+    if (progress && (i % 50 == 0 || i == steps)) progress(static_cast<double>(i) / static_cast<double>(steps));
   }
   std::vector<double> force, deformation;
   for (const auto& s : result.samples) force.push_back(s.force_N), deformation.push_back(s.deformation_mm);

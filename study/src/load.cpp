@@ -15,6 +15,7 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <thread>
 
 namespace demfem::study {
 
@@ -506,6 +507,8 @@ class StudyParser {
       if (auto v = d.choice("criterion", detail::kCriteria, Need::Required)) dem.criterion = *v;
       if (auto v = d.quantity("dt_fraction", leftOpen(0.0, 1.0), Need::Required)) dem.dt_fraction = *v;
     }
+    // Default: every core of this machine (results are reproducible per thread count).
+    dem.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     if (auto v = d.integer("threads", 1, Need::Optional)) dem.threads = static_cast<int>(*v);
     if (auto v = d.integer("seed", 0, Need::Optional)) dem.seed = static_cast<std::uint64_t>(*v);
     d.finish();
@@ -654,7 +657,7 @@ class StudyParser {
     }
   }
 
-  // The LIGGGHTS backend offers only its own contact laws (DESIGN.md section 11).
+  // The LIGGGHTS backend offers only its own contact laws (docs/architecture.md section 11).
   void checkBackendModels() {
     if (study_.dem.backend != "liggghts") return;
     const ContactModel& c = study_.soil.contact;

@@ -236,3 +236,35 @@ TEST_CASE("the shipped example data compare with the offsets they were made with
   CHECK(result.calibration[0].simulated.deformation.frequency_Hz.mean == Approx(3.2).epsilon(0.01));
   CHECK(result.calibration[0].simulated.deformation.damping_ratio.mean == Approx(0.065).epsilon(0.05));
 }
+
+TEST_CASE("a simulated tool of another name is matched by case when each side has one tool", "[analysis]") {
+  TempDir dir("one-tool");
+  fs::create_directories(dir / "measured");
+  fs::create_directories(dir / "simulated");
+  WeightDropTruth measured;
+  measured.seed = 8;
+  writeSyntheticRecording(makeWeightDropRecording(measured, RecordingFormat::Raw), dir / "measured" / "pmma_1kg.csv");
+  WeightDropTruth simulated = measured;
+  simulated.tool = "blade";  // a study of one's own naming its tool otherwise
+  simulated.frequency_Hz = 3.3;
+  simulated.noise_fraction = 0.0;
+  writeSyntheticRecording(makeWeightDropRecording(simulated, RecordingFormat::Calibrated), dir / "simulated" / "blade_1kg.csv");
+  const auto m = readRecordings({dir / "measured"});
+  const auto s = readRecordings({dir / "simulated"});
+  REQUIRE(singleToolMatch(m, s) == std::optional<std::string>("PMMA"));
+  const ComparisonResult result = compare(m, s, AnalysisSettings{});
+  REQUIRE(result.calibration.size() == 1);
+  CHECK(result.unmatched_cases.empty());
+  CHECK(result.calibration[0].simulated.deformation.frequency_Hz.mean == Approx(3.3).epsilon(0.005));
+  REQUIRE(result.simulated_tool_matched_as);
+  CHECK(result.simulated_tool_matched_as->first == "blade");
+  CHECK(toJson(result, AnalysisSettings{})["simulated_tool_matched_as"]["measured"] == "PMMA");
+
+  // With two measured tools the names must match: the blade stays unmatched.
+  WeightDropTruth s235 = measured;
+  s235.tool = "S235";
+  writeSyntheticRecording(makeWeightDropRecording(s235, RecordingFormat::Raw), dir / "measured" / "s235_1kg.csv");
+  const auto two = readRecordings({dir / "measured"});
+  CHECK_FALSE(singleToolMatch(two, s));
+  CHECK_THROWS_WITH(compare(two, s, AnalysisSettings{}), Catch::Contains("blade, 1 kg weight (simulated only)"));
+}

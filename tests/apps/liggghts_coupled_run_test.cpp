@@ -91,7 +91,7 @@ class RecordingRelay final : public adapter::CouplingApi {
     dem_.shutdown();
   }
 
-  static constexpr const char* kTool = "tool";
+  static constexpr const char* kTool = "PMMA";  // the tool of studies/quick_liggghts.json
   adapter::NodeArray undeformed, last_set_positions, positions_at_end;
   std::vector<adapter::NodeArray> interval_forces;  // one per coupling cycle, in call order
   std::string read_back_error;

@@ -1,4 +1,4 @@
-# Fails when a library includes a header of a library it may not depend on (DESIGN.md section 1),
+# Fails when a library includes a header of a library it may not depend on (docs/architecture.md section 1),
 # or when LIGGGHTS/MPI headers appear outside the LIGGGHTS backend's .cpp files (pimpl rule).
 # Usage: cmake -DSOURCE_DIR=<root> -P check_layers.cmake
 set(allowed_study "study")

@@ -116,7 +116,7 @@ TEST_CASE("a DEM-only (rigid) and a coupled run of the same tool read the same l
   doc["kind"] = "dem-only";
   doc["tools"][0]["fem"].erase("alpha_s");
   doc["tools"][0]["fem"].erase("beta_per_s");
-  doc["tools"][0].erase("sensors");  // gains belong to the FEM tool's sensors
+  doc["tools"][0].erase("sensors");  // ideal gains: a rigid tool has no sensor gains to set
   const study::Study rigid = study::parseStudy(doc.dump(), "quick.json (small tool, dem-only)");
   REQUIRE_FALSE(rigid.tools[0].fem.deformable);
 

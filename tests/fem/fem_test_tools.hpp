@@ -87,7 +87,7 @@ inline Eigen::VectorXd restrictToKeypoints(const FullModel& full, const Eigen::V
 
 
 // Eq (13)-(15) are exact for loads on keypoints only: the reduced static response equals the full
-// model's at the keypoints to 1e-9 relative (issue 3), displacements and reactions.
+// model's at the keypoints to 1e-9 relative, displacements and reactions.
 inline void checkReducedStaticEqualsFull(const study::Tool& tool) {
   const FullModel full = buildPlateModel(tool);
   const ReducedModel reduced = reduce(full);
@@ -107,7 +107,7 @@ inline void checkReducedStaticEqualsFull(const study::Tool& tool) {
 }
 
 // Guyan reduction is a Rayleigh-Ritz projection: reduced frequencies bound the full ones from above.
-// Issue 3 asks f1 within 0.5 %.
+// The first frequency is required within 0.5 %.
 inline void checkReducedFrequencies(const study::Tool& tool) {
   const FullModel full = buildPlateModel(tool);
   const Modes fm = naturalModes(full, 3);

@@ -64,7 +64,7 @@ TEST_CASE("without damping a free vibration keeps its amplitude and shows the pr
   const double dt = 1 / (f1 * 20);  // 20 steps per period: elongation ~1.6 %, well measurable
   const ModeRun run = releaseFirstMode(model, dt, {0, 0}, 10000);
   // Period: the scheme predicts cos(w_h dt) = (1 - w^2 dt^2/6) / (1 + w^2 dt^2/3); measured from
-  // the recursion the samples obey. Tolerance 1e-6 relative (issue 3).
+  // the recursion the samples obey. Tolerance 1e-6 relative.
   const auto [c1, c0] = fitRecursion(run.q, 3);
   const double measured_omega = std::acos(c1 / 2) / dt;
   const double predicted_omega = predictedDiscreteFrequency(run.omega, dt);
@@ -92,7 +92,7 @@ TEST_CASE("with Rayleigh damping a single mode decays at the damping ratio alpha
   const auto [c1, c0] = fitRecursion(run.q, 3);
   const double r = std::sqrt(-c0), theta = std::acos(c1 / (2 * r));
   const double measured_zeta = -std::log(r) / std::hypot(theta, std::log(r));
-  CHECK(measured_zeta == Approx(zeta).epsilon(0.02));  // issue 3: within 2 %
+  CHECK(measured_zeta == Approx(zeta).epsilon(0.02));  // within 2 %
 }
 
 TEST_CASE("after a step load the response settles to the static solution with balanced reactions and no period-3 mode", "[fem]") {

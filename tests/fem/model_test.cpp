@@ -18,7 +18,7 @@ using namespace demfem::fem;
 TEST_CASE("a long thin clamped strip under a tip load bends as Euler-Bernoulli predicts", "[fem]") {
   // 340 x 10 x 4 mm steel strip, clamped over the top 40 mm: free length 300 mm, L/h = 75. The
   // load-cell line is put on the clamp edge so it adds nothing. One Hex20 element through the 4 mm
-  // thickness, 5 mm in plane, as in the paper's grid. Tolerance 2 % (issue 3); shear deformation
+  // thickness, 5 mm in plane, as in the paper's grid. Tolerance 2 %; shear deformation
   // adds (E/kG)(h/L)^2/4 ~ 1e-4 and the clamp's Poisson restraint a little more.
   study::Tool strip = testing::steelTool();
   strip.geometry.length_m = 0.340;

@@ -271,7 +271,7 @@ TriangleMesh toolMesh(const study::Tool& tool) {
   return mesh;
 }
 
-std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study) {
+std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress) {
   try {
     const auto file = soilFile(study, defaultSoilDirectory());
     SettledSoil soil;
@@ -279,7 +279,7 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study) {
       soil = readSettledSoil(file);
     } else {
       DepositReport report;
-      soil = depositSoil(study, study.dem.threads, report, {});
+      soil = depositSoil(study, study.dem.threads, report, deposit_progress);
       writeSettledSoil(file, soil);
     }
     return std::make_unique<BuiltinBackend>(study, soil);

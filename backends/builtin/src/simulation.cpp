@@ -254,7 +254,7 @@ double DemSimulation::criticalTimeStep(study::TimeStepCriterion criterion) const
   if (particleCount() == 0) throw std::logic_error("builtin DEM: no particles to derive a time step from");
   const double rmin = *std::min_element(radius_.begin(), radius_.end());
   if (criterion == study::TimeStepCriterion::Rayleigh) {
-    // Rayleigh step: dt_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) (DESIGN.md section 11).
+    // Rayleigh step: dt_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) (docs/architecture.md section 11).
     double dt = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < particleCount(); ++i) {
       const auto& m = table_.materials[material_[i]];
@@ -700,7 +700,7 @@ void DemSimulation::wallForces() {
         t = Touch{P + m, f.key, f.kind, f.point, normal, dist, {tri[0], tri[1], tri[2]}, {f.weights[0], f.weights[1], f.weights[2]}};
       }
       if (nt == 0) continue;
-      // De-duplicate (DESIGN.md section 2): faces first; an edge or vertex seen from several
+      // De-duplicate (docs/architecture.md section 2): faces first; an edge or vertex seen from several
       // triangles is one contact; an edge/vertex belonging to an accepted face (or a vertex of an
       // accepted edge) of the same mesh is the same contact seen from a neighbour triangle.
       std::sort(touch, touch + nt, [](const Touch& a, const Touch& b) {

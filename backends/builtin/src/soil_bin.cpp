@@ -54,8 +54,19 @@ int layerAt(const study::Soil& soil, double y) {
   return static_cast<int>(soil.layers.size()) - 1;
 }
 
-SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report,
-                        const std::function<void(const std::string&)>& progress) {
+double meanParticleVolume(const study::Soil& soil) {
+  const double rmin = soil.diameter_min_m / 2, rmax = soil.diameter_max_m / 2;
+  // Mean sphere volume for radii uniform in [rmin, rmax]: E[r^3] = (rmax^4 - rmin^4) / (4 (rmax - rmin)).
+  const double mean_r3 = rmax > rmin ? (std::pow(rmax, 4) - std::pow(rmin, 4)) / (4 * (rmax - rmin)) : rmin * rmin * rmin;
+  return 4.0 / 3.0 * std::numbers::pi * mean_r3;
+}
+
+std::size_t estimatedParticleCount(const study::Soil& soil) {
+  return static_cast<std::size_t>(
+      std::llround(kSettledPacking * soil.bin_width_m * soil.bin_length_m * soil.fill_height_m / meanParticleVolume(soil)));
+}
+
+SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress) {
   const auto& soil = study.soil;
   if (soil.layers.empty()) throw std::invalid_argument("builtin DEM: /soil/layers is empty");
   DemSimulation sim(soil, binDomain(soil), threads);
@@ -63,9 +74,7 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
   std::mt19937_64 rng(soil.deposition_seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double rmin = soil.diameter_min_m / 2, rmax = soil.diameter_max_m / 2;
-  // Mean sphere volume for radii uniform in [rmin, rmax]: E[r^3] = (rmax^4 - rmin^4) / (4 (rmax - rmin)).
-  const double mean_r3 = rmax > rmin ? (std::pow(rmax, 4) - std::pow(rmin, 4)) / (4 * (rmax - rmin)) : rmin * rmin * rmin;
-  const double mean_volume = 4.0 / 3.0 * std::numbers::pi * mean_r3;
+  const double mean_volume = meanParticleVolume(soil);
   const double w = soil.bin_width_m, l = soil.bin_length_m;
   const double spacing = kLatticeGap * soil.diameter_max_m;
   const int nx = std::max(1, static_cast<int>((w - spacing) / spacing) + 1);
@@ -77,6 +86,8 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
   const int deepest = static_cast<int>(soil.layers.size()) - 1;
   const int deposit_material = sim.materials().index(soil.layers[deepest].material);
 
+  // Progress: the deposition stages and the final settling, each counted by its time cap.
+  const double stages = static_cast<double>(stage_tops.size() + 1);
   double filled = 0;  // height filled so far
   bool dt_set = false;
   for (std::size_t s = 0; s < stage_tops.size(); ++s) {
@@ -115,6 +126,7 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
     // Fall first (energy rises), then settle below the threshold.
     while (sim.time() - start < kStageTimeCap_s) {
       sim.run(kEnergyCheckSteps);
+      if (progress) progress((static_cast<double>(s) + (sim.time() - start) / kStageTimeCap_s) / stages, "");
       energy = sim.kineticEnergy();
       if (energy < soil.settle_kinetic_energy_J && sim.time() - start > 0.05) {
         settled = true;
@@ -128,7 +140,7 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
       line << "stage " << s + 1 << "/" << stage_tops.size() << ": " << sim.particleCount() << " particles, up to "
            << filled * 1e3 << " mm, kinetic energy " << energy << " J after " << sim.time() - start << " s"
            << (settled ? "" : " (time cap reached before the energy threshold)");
-      progress(line.str());
+      progress((static_cast<double>(s) + 1.0) / stages, line.str());
     }
   }
   // Trim above the fill height, tag layers by depth, settle again with the layer materials.
@@ -143,6 +155,7 @@ SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& r
   bool settled = false;
   while (sim.time() - start < kStageTimeCap_s) {
     sim.run(kEnergyCheckSteps);
+    if (progress) progress((stages - 1.0 + (sim.time() - start) / kStageTimeCap_s) / stages, "");
     if (sim.kineticEnergy() < soil.settle_kinetic_energy_J) {
       settled = true;
       break;

@@ -1,4 +1,4 @@
-// Closed-form checks of the builtin DEM contact laws and wall contacts (issue: built-in DEM backend).
+// Closed-form checks of the builtin DEM contact laws and wall contacts (docs/builtin-dem.md).
 #include "demfem/backends/builtin/contact_law.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "test_soil.hpp"
@@ -95,7 +95,7 @@ TEST_CASE("head-on hysteretic collision without viscous damping has restitution 
     const double separation = sim.particle(1).x[0] - sim.particle(0).x[0];
     REQUIRE(separation > 2 * kR);
     const double e_measured = (sim.particle(1).v[0] - sim.particle(0).v[0]) / (2 * v0);
-    // Issue tolerance: restitution = e within 1e-3.
+    // Tolerance: restitution = e within 1e-3.
     CHECK(std::fabs(e_measured - e) < 1e-3);
   }
 }
@@ -111,7 +111,7 @@ TEST_CASE("sphere resting on a plane and on a mesh face has overlap m g / K1", "
     sim.addPlane({{0, 0, 0}, {0, 1, 0}, 1});
     sim.addParticle({{0, kR, 0}, {0, 0, 0}, {0, 0, 0}, kR, 0, 0});
     sim.setTimeStep(1e-5);
-    // Issue tolerance 1e-3 (relative); the ramp spans about 300 contact periods.
+    // Tolerance 1e-3 (relative); the ramp spans about 300 contact periods.
     CHECK(quasiStaticRestingOverlap(sim, 0.4, 0.02) == Approx(expected).epsilon(1e-3));
   }
   SECTION("mesh face") {
@@ -184,7 +184,7 @@ TEST_CASE("rolling friction decelerates a rolling sphere at (5/7) mu_r g", "[bui
       ++n;
     }
     const double slope = (n * stv - st * sv) / (n * stt - st * st);
-    // Issue tolerance: 1 %.
+    // Tolerance: 1 %.
     CHECK(-slope == Approx(5.0 / 7.0 * p.rolling_friction * kG).epsilon(1e-2));
   }
 }

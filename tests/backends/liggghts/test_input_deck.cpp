@@ -104,7 +104,7 @@ TEST_CASE("EDEM-only contact laws and values LIGGGHTS would abort on are refused
 TEST_CASE("the DEM step follows the study's criterion", "[liggghts]") {
   auto s = smallStudy();
   s.dem.criterion = study::TimeStepCriterion::Rayleigh;
-  // Rayleigh: pi R sqrt(rho/G) / (0.1631 nu + 0.8766) at R = 4.75 mm, G = E / 2.6 (DESIGN.md section 11)
+  // Rayleigh: pi R sqrt(rho/G) / (0.1631 nu + 0.8766) at R = 4.75 mm, G = E / 2.6 (docs/architecture.md section 11)
   const double rayleigh = std::numbers::pi * 0.00475 * std::sqrt(2600 / (5e6 / 2.6)) / (0.1631 * 0.3 + 0.8766);
   CHECK(liggghts::demTimeStep(s) == Approx(0.2 * rayleigh).epsilon(1e-12));
   s.dem.criterion = study::TimeStepCriterion::StiffestSpring;

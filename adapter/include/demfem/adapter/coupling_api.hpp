@@ -1,10 +1,10 @@
 // demfem coupling API: what a DEM code offers the FEM client (paper Section 2.4, Fig. 3;
-// DESIGN.md section 2). One object per DEM simulation. Implemented by the built-in DEM, the
+// docs/architecture.md section 2). One object per DEM simulation. Implemented by the built-in DEM, the
 // LIGGGHTS backend, the remote proxy (this API over the ZeroMQ protocol) and analytic test backends.
 //
 // Contract
 // - Units: SI (m, s, N). Arrays are row-major n x 3 (x, y, z of node 0, then node 1, ...).
-// - Frame: node positions and forces are given in the geometry's LOCAL frame (DESIGN.md section 10:
+// - Frame: node positions and forces are given in the geometry's LOCAL frame (docs/architecture.md section 10:
 //   tool x across the width, y along the length with the tip at y = 0, z the travel direction).
 //   The geometry's rigid motion (RigidMotion) maps local to bin coordinates; deformation is what
 //   setNodePositions() adds on top of the undeformed keypoint positions.

@@ -1,9 +1,9 @@
 // The keypoint surface of a plate tool: the nodes and triangles both sides of the coupling share
-// (paper Fig. 2 and Fig. 4e; DESIGN.md section 4). The DEM backends build the tool wall from it,
+// (paper Fig. 2 and Fig. 4e; docs/architecture.md section 4). The DEM backends build the tool wall from it,
 // the FEM client meshes the plate so that these keypoints are nodes of its mesh.
 //
 // Contract
-// - Tool local frame (DESIGN.md section 10), metres: x across the width in [-W/2, W/2], y along the
+// - Tool local frame (docs/architecture.md section 10), metres: x across the width in [-W/2, W/2], y along the
 //   length in [0, L] (tip y = 0, top y = L), z through the thickness in [-T/2, T/2]; the tool travels
 //   in +z, so the face z = +T/2 is the front (soil-engaging) face.
 // - Keypoints are the nodes of the grid that lie on the surface. Along each edge the grid has

@@ -1,4 +1,4 @@
-// The DEM adapter server: serves any CouplingApi over the demfem protocol (DESIGN.md sections 2-3,
+// The DEM adapter server: serves any CouplingApi over the demfem protocol (docs/architecture.md sections 2-3,
 // docs/protocol.md).
 //
 // Contract

@@ -18,6 +18,8 @@
 // simulate(0), the interval is empty and the instantaneous value at time() is returned.
 // Time is step_count * dem_time_step_s exactly (simulate(d) runs round(d / dt) steps).
 // checkpoint()/restore() write/read a small binary file; a restored backend continues bit-identically.
+// Built from tools without soil, every tool rests at the bin origin (velocity 0, t0 0) until the
+// client sets a RigidMotion; the loads above do not depend on it.
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"

@@ -1,4 +1,4 @@
-// demfem analysis: reading soil-bin and calibration-weight recordings (DESIGN.md section 8).
+// demfem analysis: reading soil-bin and calibration-weight recordings (docs/architecture.md section 8).
 //
 // Contract
 // - A recording is a CSV file with a header line plus a JSON sidecar of the same stem

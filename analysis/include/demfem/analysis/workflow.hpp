@@ -10,7 +10,8 @@
 // deformation fitted to each whole record (step_response.hpp), pooled per case (mean of the
 // repeats' fitted values; spread: cycle by cycle over all repeats, steady value between repeats).
 //
-// compare(): both sides evaluated as above, then per soil-bin case the percent difference of the
+// compare(): the simulated tool renamed as singleToolMatch() says, both sides evaluated as above,
+// then per soil-bin case the percent difference of the
 // pooled means 100 (sim - meas) / meas (Fig. 15), FFT amplitude spectra of the window segment of
 // every run and least-squares power laws a f^b fitted to the pooled spectral points of each side
 // over the common band (Section 3.6, Fig. 17) with the ratio of the fitted amplitudes; per
@@ -123,7 +124,15 @@ struct ComparisonResult {
   std::vector<SoilBinComparison> soil_bin;
   std::vector<CalibrationComparison> calibration;
   std::vector<std::string> unmatched_cases;  // "PMMA, 42 mm depth (measured only)"
+  // Set when the simulated tool was matched by case under the measured one (singleToolMatch).
+  std::optional<std::pair<std::string, std::string>> simulated_tool_matched_as;  // {simulated name, measured name}
 };
+
+// A study with one tool matches recordings by their case: when the simulated recordings name one
+// tool, the measured ones one other tool, the measured name (compare() then matches by depth_mm
+// or mass_kg); nullopt when the names agree or either side names several tools (then the names
+// must match, or the caller renames with readRecordings' tool_override).
+std::optional<std::string> singleToolMatch(const std::vector<Recording>& measured, const std::vector<Recording>& simulated);
 
 // Throws InputError when no case appears on both sides.
 ComparisonResult compare(const std::vector<Recording>& measured, const std::vector<Recording>& simulated, const AnalysisSettings& settings);

@@ -1,5 +1,5 @@
-// The coupled DEM-FEM cycle of paper Fig. 3, driven from the FEM side through the abstract coupling
-// API, exactly as the paper's client drives EDEM:
+// The coupled DEM-FEM cycle of paper Fig. 3 (docs/architecture.md sections 1-4), driven from the FEM side
+// through the abstract coupling API, exactly as the paper's client drives EDEM:
 //   nodeForces -> FEM step (Eq 9, reactions Eq 10) -> setNodePositions -> simulate(dt_FEM), repeated.
 //
 // Contract
@@ -75,6 +75,7 @@ struct CoupledRunOptions {
   bool resume = false;
   double keypoint_tolerance_m = 1e-6;
   std::function<void(const CoupledProgress&)> on_progress;  // after every step
+  std::function<void(double)> on_reduction_progress;        // keypoint reduction, fraction done (reduce())
   std::function<bool()> stop_requested;                     // checked before every step
 };
 

@@ -1,4 +1,4 @@
-// demfem time integration of the reduced tool model: paper Eq (3)-(10) (DESIGN.md section 4).
+// demfem time integration of the reduced tool model: paper Eq (3)-(10) (docs/architecture.md section 4).
 //
 // The scheme (Eq 5) is Newmark's method with beta = 1/3, gamma = 1/2 written in three-level form:
 //   M (u+ - 2u + u-)/dt^2 + C (u+ - u-)/(2 dt) + K (u+ + u + u-)/3 = (f+ + f + f-)/3
@@ -9,7 +9,7 @@
 // Contract
 // - Units: SI. dt in s, alpha in s (stiffness-proportional), beta in 1/s (mass-proportional); the
 //   damping ratio of a mode of angular frequency w is alpha w / 2 + beta / (2 w). Table 3's
-//   alpha = 0.55 is read as 0.55 ms = 5.5e-4 s (DESIGN.md section 4; docs/fem.md).
+//   alpha = 0.55 is read as 0.55 ms = 5.5e-4 s (docs/architecture.md section 4; docs/fem.md).
 // - Vectors have the reduced model's DOF layout (3 * keypoint + c), i.e. an adapter::NodeArray.
 // - Forces passed to step() are the APPLIED keypoint forces (N), e.g. the DEM's nodeForces(); the
 //   values at fixed DOFs are allowed (they go straight into the supports). The fixed DOFs stay at
@@ -21,7 +21,7 @@
 //   recursion f+ + f + f- = 3(...) has a neutral period-3 mode; start() initialises f and f- from a
 //   state at rest in static equilibrium (the state Newmark's one-step form would have), so the
 //   sequence equals Newmark's instantaneous reactions and carries no period-3 component.
-// - Call sequence (the coupled cycle of Fig. 3, DESIGN.md section 1):
+// - Call sequence (the coupled cycle of Fig. 3, docs/architecture.md section 1):
 //     ReducedModel model = reduce(buildFullModel(tool));
 //     ThreeLevelIntegrator integ(model, study.fem.dt_s, {tool.fem.alpha_s, tool.fem.beta_per_s});
 //     integ.start(f0);                         // at rest, static equilibrium under f0 (often 0)

@@ -1,7 +1,7 @@
-// demfem FEM meshes: quadratic solid elements for the tool (paper Section 2.6; DESIGN.md section 4).
+// demfem FEM meshes: quadratic solid elements for the tool (paper Section 2.6; docs/architecture.md section 4).
 //
 // Contract
-// - Units: metres. Frame: the tool local frame (DESIGN.md section 10): x across the width, y along
+// - Units: metres. Frame: the tool local frame (docs/architecture.md section 10): x across the width, y along
 //   the length (tip y = 0, top y = L), z through the thickness (the travel direction).
 // - Node order inside an element follows CalculiX/Abaqus (C3D20: corners 0-7 as two faces 0-3 and
 //   4-7, then mid-edges 8-11 of the first face, 12-15 of the second, 16-19 of the edges between them;

@@ -1,5 +1,5 @@
 // demfem FEM model of a tool: consistent M and K, constraints, and the keypoint-reduced model of
-// paper Section 2.6, Eq (11)-(15) (DESIGN.md section 4).
+// paper Section 2.6, Eq (11)-(15) (docs/architecture.md section 4).
 //
 // Contract
 // - Units: SI (m, kg, N, Pa). Frame: tool local frame (x width, y length with tip y = 0 and top
@@ -40,6 +40,7 @@
 #include <Eigen/SparseCore>
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -132,8 +133,9 @@ void applyToolConstraints(FullModel& model, const study::ToolConstraints& constr
 
 // Eq (11)-(15): reduces `model` to its keypoints. Throws std::invalid_argument if a constrained DOF
 // is not a keypoint DOF (message lists node, coordinates and DOF), std::runtime_error if K_bb is not
-// positive definite (a mechanism among the condensed nodes).
-ReducedModel reduce(const FullModel& model);
+// positive definite (a mechanism among the condensed nodes). `progress` (may be empty) receives the
+// fraction done, rising to 1 (a few tens of calls; the paper's plates take tens of seconds).
+ReducedModel reduce(const FullModel& model, const std::function<void(double)>& progress = {});
 
 // Adds a lumped mass (kg) to the diagonal of M at each listed reduced DOF (Section 2.10.1: the
 // calibration weight on the pan rows).

@@ -1,4 +1,4 @@
-// demfem tool sensors (paper Section 2.9, Fig. 5; DESIGN.md section 4) and keypoint matching with a
+// demfem tool sensors (paper Section 2.9, Fig. 5; docs/architecture.md section 4) and keypoint matching with a
 // DEM backend.
 //
 // Contract

@@ -1,4 +1,4 @@
-// demfem calibration-weight simulation (paper Section 2.10.1, Fig. 5, 7, 8; DESIGN.md section 4).
+// demfem calibration-weight simulation (paper Section 2.10.1, Fig. 5, 7, 8; docs/architecture.md section 4).
 //
 // The tool is clamped horizontally exactly as in the soil bin (Section 2.9 constraints) with gravity
 // along its -z axis (the same direction as the soil load, so force and deformation read positive).
@@ -16,6 +16,7 @@
 #include "demfem/fem/model.hpp"
 #include "demfem/study/study.hpp"
 
+#include <functional>
 #include <ostream>
 #include <vector>
 
@@ -51,9 +52,10 @@ SignalCharacteristics characterize(const std::vector<double>& values, double dt_
 
 // Runs the calibration-weight test on `model` (a reduced model of `tool`; it is copied and the
 // lumped mass added to the copy). Throws std::invalid_argument for a non-positive mass or duration,
-// or if no keypoint row lies within pan_rows_from_tip of the tip.
+// or if no keypoint row lies within pan_rows_from_tip of the tip. `progress` (may be empty)
+// receives the fraction of the time steps done, every 50 steps and at the end.
 WeightDropResult simulateWeightDrop(const ReducedModel& model, const study::Tool& tool, const study::WeightDrop& drop,
-                                    double dt_s);
+                                    double dt_s, const std::function<void(double)>& progress = {});
 
 // Writes "t_s,force_N,deformation_mm" and one line per sample (Fig. 7's columns).
 void writeWeightDropCsv(std::ostream& out, const WeightDropResult& result);

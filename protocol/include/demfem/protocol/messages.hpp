@@ -1,5 +1,5 @@
 // demfem wire protocol, version 1: the messages exchanged between a FEM client and a DEM adapter
-// server (DESIGN.md section 3; written down for other languages in docs/protocol.md).
+// server (docs/architecture.md section 3; written down for other languages in docs/protocol.md).
 //
 // Contract
 // - One request gets exactly one reply: the reply for its operation, or an ErrorReply.

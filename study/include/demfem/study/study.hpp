@@ -1,4 +1,4 @@
-// demfem study: the in-memory form of one study file (studies/*.json), DESIGN.md section 7.
+// demfem study: the in-memory form of one study file (studies/*.json), docs/architecture.md section 7.
 //
 // Contract
 // - Every quantity is SI inside (m, s, kg, N, Pa, rad). The JSON file carries the unit in the key
@@ -6,7 +6,7 @@
 // - A Study returned by loadStudy() has passed validation: every field has the documented type,
 //   unit and range, cross-field rules hold (layers tile the bin depth, the interaction table covers
 //   every material pair, constraints lie on the tool). Code using a Study may rely on that.
-// - Frames (DESIGN.md section 10): bin frame x across, y up (y = 0 bin floor), z along the bin, with
+// - Frames (docs/architecture.md section 10): bin frame x across, y up (y = 0 bin floor), z along the bin, with
 //   the origin at a bottom corner so the soil fills x in [0, bin_width], z in [0, bin_length]; tool
 //   local frame x across the width, y along the length (tip y = 0, top y = L), z the travel direction
 //   (through the thickness), origin at the tip, centred in x and z. The tool moves in +z of the bin
@@ -57,7 +57,7 @@ struct DemMaterial {
   bool operator==(const DemMaterial&) const = default;
 };
 
-// Contact law selection (DESIGN.md section 11). EDEM-style and LIGGGHTS-compatible variants.
+// Contact law selection (docs/architecture.md section 11). EDEM-style and LIGGGHTS-compatible variants.
 enum class NormalModel { EdemHysteretic, Hooke, HookeHysteresis };
 enum class CohesionModel { None, EdemLinear, Sjkr, Sjkr2 };
 enum class RollingModel { None, EdemStandard, Cdt, Epsd };
@@ -165,7 +165,8 @@ struct ToolSensors {
   bool operator==(const ToolSensors&) const = default;
 };
 
-// Rigid motion in the bin frame: inserted vertically to `depth`, then dragged in +z.
+// Rigid motion in the bin frame: inserted vertically to `depth`, then dragged in +z. The motion a
+// run follows is computed from these by planToolMotion() (tool_motion.hpp).
 struct ToolMotion {
   double depth_m = 0.018;
   double velocity_m_s = 0.03119;
@@ -209,7 +210,7 @@ struct DemSettings {
   TimeStepCriterion criterion = TimeStepCriterion::Rayleigh;
   double dt_fraction = 0.2;          // of the chosen criterion's critical step
   std::optional<double> dt_s;        // explicit step, overrides the criterion
-  int threads = 1;
+  int threads = 1;                // a study file without dem.threads gets the machine's cores (loadStudy)
   std::uint64_t seed = 1;             // draws during the run; deposition: soil.deposition_seed
   bool operator==(const DemSettings&) const = default;
 };

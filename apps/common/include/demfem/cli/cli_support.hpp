@@ -37,6 +37,9 @@ int runApp(CLI::App& app, int argc, char** argv);
 // Adds `--json FILE` to `cmd` (FILE "-" = standard output); returns the bound string.
 std::string& addJsonOption(CLI::App& cmd);
 
+// False when `--json -` claimed standard output: then the command prints nothing else there.
+inline bool textOnStdout(const std::string& json_target) { return json_target != "-"; }
+
 // Writes `doc` to `target` ("-" = stdout) atomically (temp file + rename). No-op if target empty.
 void writeJson(const std::string& target, const nlohmann::json& doc);
 

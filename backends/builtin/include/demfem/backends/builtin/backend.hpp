@@ -2,6 +2,7 @@
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"
+#include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/builtin/triangle_mesh.hpp"
 #include "demfem/study/study.hpp"
 
@@ -10,8 +11,9 @@
 namespace demfem::builtin {
 
 // Builds the DEM simulation of `study` (soil, bin, tools at their start positions) ready for the
-// coupling cycle. Throws adapter::CouplingError on a study this backend cannot run.
-std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study);
+// coupling cycle; deposits the soil first unless it is saved (soil_bin.hpp), reporting to
+// `deposit_progress` (may be empty). Throws adapter::CouplingError on a study this backend cannot run.
+std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress = {});
 
 // The DEM mesh of a tool: the plate's keypoint triangulation shared with the FEM
 // (adapter/plate_surface.hpp), local frame, material not yet set. Throws

@@ -1,4 +1,4 @@
-// Contact laws of the built-in DEM (DESIGN.md section 11): the force and torque of one
+// Contact laws of the built-in DEM (docs/architecture.md section 11): the force and torque of one
 // sphere-sphere or sphere-wall contact, for the EDEM-style and the LIGGGHTS 3.8-compatible models.
 //
 // Contract

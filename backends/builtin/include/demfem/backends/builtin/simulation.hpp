@@ -1,8 +1,8 @@
-// The built-in DEM engine (DESIGN.md section 5): spheres, plane walls and triangle-mesh walls,
+// The built-in DEM engine (docs/architecture.md section 5): spheres, plane walls and triangle-mesh walls,
 // velocity-Verlet integration, linked cells + Verlet lists with a skin, OpenMP.
 //
 // Contract
-// - SI units, bin frame (x across, y up, z along the bin; DESIGN.md section 10). Gravity along -y
+// - SI units, bin frame (x across, y up, z along the bin; docs/architecture.md section 10). Gravity along -y
 //   unless set otherwise.
 // - Data layout (for speed): particle quantities are separate contiguous arrays (structure of
 //   arrays; vectors stored xyz-interleaved); the half neighbour list is CSR (row = particle i, j > i,

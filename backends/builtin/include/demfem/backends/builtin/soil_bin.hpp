@@ -1,9 +1,9 @@
 // The soil bin of a study for the built-in DEM: the box, the gravity deposition of the particle
 // assembly in layers (paper Section 2.9, Fig. 4a-b) and the settled-soil file reused by every study
-// on the same soil (DESIGN.md section 5).
+// on the same soil (docs/architecture.md section 5).
 //
 // Contract
-// - Bin frame (DESIGN.md section 10, study.hpp), metres: origin at a bottom corner, x in [0, W],
+// - Bin frame (docs/architecture.md section 10, study.hpp), metres: origin at a bottom corner, x in [0, W],
 //   y up from the floor y = 0, z in [0, L]. Walls are planes (floor and four sides, open top) of the study's bin material.
 // - Deposition: particles (diameters uniform in [d_min, d_max], seed soil.deposition_seed) are
 //   rained in four stages from the bottom up, one per layer thickness of the study (the paper
@@ -57,10 +57,22 @@ double studyTimeStep(const DemSimulation& sim, const study::DemSettings& dem);
 // Layer index (into soil.layers) of a particle centre at height y; the deepest layer below the fill.
 int layerAt(const study::Soil& soil, double y);
 
+// Mean particle volume (m^3) of the soil's size distribution (radii uniform between the diameter
+// bounds' halves).
+double meanParticleVolume(const study::Soil& soil);
+// Particles a deposition of `soil` settles to, estimated from the bin volume below the fill height,
+// the packing each stage is sized with and the mean particle volume (the quick bin: within 5 % of
+// the deposited count).
+std::size_t estimatedParticleCount(const study::Soil& soil);
+
+// Progress of depositSoil: the fraction done (each stage and the final settling counted by its
+// simulated-time cap, so an upper bound on what is left) and, at the end of each stage, its
+// summary line (empty otherwise).
+using DepositProgress = std::function<void(double fraction, const std::string& stage_line)>;
+
 // Deposits and settles the soil of `study` (deterministic for its seed and `threads`).
-// `progress` (may be empty) receives one line per stage.
-SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report,
-                        const std::function<void(const std::string&)>& progress);
+// `progress` may be empty.
+SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress);
 
 void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil);
 // Throws std::runtime_error naming the file on a missing, truncated or foreign file.

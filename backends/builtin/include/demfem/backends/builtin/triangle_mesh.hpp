@@ -9,7 +9,7 @@
 //   which feature it lies on (the face interior, one of its edges, one of its vertices). Features are
 //   identified mesh-wide (face: triangle id; edge: its two node ids; vertex: node id), so that the
 //   same edge seen from its two triangles, or a vertex seen from all its triangles, is one contact:
-//   this is how the DEM avoids double counting (DESIGN.md section 2).
+//   this is how the DEM avoids double counting (docs/architecture.md section 2).
 // - Barycentric weights of the contact point (sum 1, non-negative) split a contact force to the three
 //   nodes so that total force and moment are conserved.
 #pragma once

@@ -1,10 +1,10 @@
-// Translation of a demfem study into LIGGGHTS-PUBLIC 3.8 input commands (DESIGN.md sections 6 and 11;
+// Translation of a demfem study into LIGGGHTS-PUBLIC 3.8 input commands (docs/architecture.md sections 6 and 11;
 // docs/liggghts-backend.md maps every study input onto the LIGGGHTS one and says where they differ).
 // Pure text: no LIGGGHTS or MPI header is needed here, so the translation is testable on its own.
 //
 // Contract
 // - Units: the deck uses LIGGGHTS `units si` (m, kg, s, N), like the Study.
-// - Bin frame (DESIGN.md section 10): x across the bin, x in [0, W]; y up, floor at y = 0; z along the
+// - Bin frame (docs/architecture.md section 10): x across the bin, x in [0, W]; y up, floor at y = 0; z along the
 //   bin, z in [0, bin length] (the frame of the built-in backend and the FEM client). The bin walls are primitive planes; the box is
 //   larger than the bin so that the tools stay inside it over their whole stroke.
 // - Atom types: 1..P the particle materials in the order they first appear in soil.layers, then the
@@ -49,7 +49,7 @@ struct InputDeck {
 
 // The DEM step the deck uses: the study's explicit dem.dt_s, else dem.dt_fraction of the critical
 // step of dem.criterion: Rayleigh dt_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) at the smallest
-// particle (DESIGN.md section 11), or StiffestSpring pi sqrt(m*/k_max) with k_max the stiffest spring
+// particle (docs/architecture.md section 11), or StiffestSpring pi sqrt(m*/k_max) with k_max the stiffest spring
 // of LIGGGHTS' hooke law (k2max = kn * coefficientMaxElasticStiffness for hooke/hysteresis).
 double demTimeStep(const study::Study& study);
 

@@ -1,0 +1,2 @@
+// Cites docs/architecture.md section 7, which this tree lacks, and issue 3.
+int main() { return 0; }
