@@ -10,4 +10,5 @@ void addDepositCommand(CLI::App& app);   // deposit.cpp
 void addEvaluateCommand(CLI::App& app);  // evaluate.cpp
 void addCompareCommand(CLI::App& app);   // compare.cpp
 void addCalibrateCommand(CLI::App& app); // calibrate.cpp
+void addDiagnoseCommand(CLI::App& app);  // diagnose.cpp
 }  // namespace demfem::cli

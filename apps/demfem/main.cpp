@@ -14,5 +14,6 @@ int main(int argc, char** argv) {
   demfem::cli::addEvaluateCommand(app);
   demfem::cli::addCompareCommand(app);
   demfem::cli::addCalibrateCommand(app);
+  demfem::cli::addDiagnoseCommand(app);
   return demfem::cli::runApp(app, argc, argv);
 }

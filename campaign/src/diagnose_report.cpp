@@ -1,6 +1,7 @@
 // Outputs of a diagnosis (diagnose.hpp): JSON, report.md, extended_study.json, before/after plots.
 #include "demfem/campaign/diagnose.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -122,20 +123,20 @@ std::string signatureTable(const analysis::Signatures& s) {
 }
 
 std::string rankingTable(const Diagnosis& d) {
-  std::string md = "| rank | cause | fitted values | error before (%) | error after (%) | gain (%) | delta BIC | split |\n"
-                   "| --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  std::string md = "| rank | cause | fitted values (+- one sigma) | unique | error before (%) | error after (%) | gain (%) | delta BIC | split |\n"
+                   "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   int rank = 0;
   for (const CauseResult& c : d.ranking) {
     if (!c.fitted) {
-      md += "| - | " + c.id + " | not fitted: signature absent | | | | | |\n";
+      md += "| - | " + c.id + " | not fitted: signature absent | | | | | | |\n";
       continue;
     }
     std::string values;
     for (const auto& p : c.parameters)
       values += (values.empty() ? "" : "; ") + p.spec.label() + " = " +
                 (p.value ? number(*p.value) + " +- " + number(p.std_dev, 2) : std::string("unidentified"));
-    if (c.minima > 1) values += " (" + std::to_string(c.minima) + " distinct minima)";
-    md += "| " + std::to_string(++rank) + " | " + c.id + " | " + values + " | " + number(c.error_before_percent) + " | " +
+    const std::string unique = c.minima == 1 ? "yes" : "no: " + std::to_string(c.minima) + " distinct minima within the noise";
+    md += "| " + std::to_string(++rank) + " | " + c.id + " | " + values + " | " + unique + " | " + number(c.error_before_percent) + " | " +
           number(c.error_after_percent) + " | " + number(c.gain_percent) + " | " + number(c.delta_bic) + " | " + c.split + " |\n";
   }
   return md;

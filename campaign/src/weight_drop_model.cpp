@@ -9,8 +9,11 @@
 // kModes; the others answer the step load quasi-statically (static correction u_res = K^-1 f -
 // sum_j phi_j g_j / w_j^2, present from the first step), which keeps the static solution exact.
 // Scaling: K_r = (E / E_ref) K_r,ref, so w^2, the load-cell stiffness terms and 1/u_res scale by
-// E / E_ref while the mode shapes stay. A compliant clamp's ground springs (fem/model.hpp) do not
-// scale with E: with them the modes are computed for each E.
+// E / E_ref while the mode shapes stay. A compliant clamp (fem/model.hpp) adds springs S on keypoint
+// DOFs, which the reduction leaves untouched and which are proportional to k_theta: the reduction
+// is kept per clamp layout, K_r = (E / E_ref) (K_ref - S_ref) + (k_theta / k_ref) S_ref is set
+// exactly for each E and k_theta, and the basis is then per (E, k_theta). Sensor gains scale the
+// outputs only, so they change neither the reduction nor the basis.
 #include "demfem/campaign/model.hpp"
 
 #include "demfem/fem/model.hpp"
@@ -34,6 +37,7 @@ constexpr double kLeadIn_s = 0.1;  // rest before the weight is hung (model.hpp)
 struct Reduction {
   fem::ReducedModel model;
   double E_ref_Pa = 0;
+  double k_ref_Nm_per_rad = 0;  // clamp spring of `model` (0: rigid clamp)
 };
 
 // The modal description of one weight on one reduction (at E_ref).
@@ -96,6 +100,8 @@ std::string reductionKey(const study::Tool& tool) {
   t.fem.beta_per_s = 0;
   t.motion = {};
   t.dem_material.clear();
+  t.sensors = {};
+  if (t.constraints.clamp_rotational_stiffness_Nm_per_rad) t.constraints.clamp_rotational_stiffness_Nm_per_rad = 1.0;
   s.tools = {t};
   return study::toJson(s)["tools"].dump();
 }
@@ -109,25 +115,33 @@ std::vector<int> panDofs(const fem::ReducedModel& model, const study::WeightDrop
   return dofs;
 }
 
-// K_r at E = scale * E_ref: the material part scales, the compliant clamp's springs do not.
-void scaleMaterialStiffness(fem::ReducedModel& model, double scale) {
-  for (const auto& [dof, k] : model.constraints.springs) model.K(dof, dof) -= k;
-  model.K *= scale;
-  for (const auto& [dof, k] : model.constraints.springs) model.K(dof, dof) += k;
+// The reduced model of `tool` from its reduction: with a clamp spring, K at the tool's E and
+// k_theta (header comment); without, the reduction as it is (E enters by scaling).
+fem::ReducedModel modelOf(const Reduction& reduction, const study::Tool& tool) {
+  fem::ReducedModel model = reduction.model;
+  const auto& k = tool.constraints.clamp_rotational_stiffness_Nm_per_rad;
+  if (!k) return model;
+  const double e = tool.fem.youngs_Pa / reduction.E_ref_Pa, s = *k / reduction.k_ref_Nm_per_rad;
+  model.K *= e;
+  for (auto& [dof, stiffness] : model.constraints.springs) {
+    model.K(dof, dof) += (s - e) * stiffness;
+    stiffness *= s;
+  }
+  return model;
 }
 
-// `material_scale`: E / E_ref built into the basis (1 when the caller scales it, see run()).
-Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study::WeightDrop& drop, double material_scale) {
+Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study::WeightDrop& drop) {
   const std::vector<int> pan = panDofs(reduction.model, drop);
   const auto n = static_cast<double>(pan.size());
   Eigen::VectorXd load = Eigen::VectorXd::Zero(reduction.model.dofCount());
   for (int dof : pan) load(dof) = -drop.mass_kg * fem::kStandardGravity_m_s2 / n;  // as fem::simulateWeightDrop
-  fem::ReducedModel loaded = reduction.model;
-  if (material_scale != 1) scaleMaterialStiffness(loaded, material_scale);
+  fem::ReducedModel loaded = modelOf(reduction, tool);
   fem::addLumpedMass(loaded, pan, drop.mass_kg / n);
   const int free_count = static_cast<int>(loaded.freeDofs().size());
   const fem::Modes modes = fem::naturalModes(loaded, std::min(kModes, free_count / 2));
-  const fem::Sensors sensors(loaded, tool);
+  study::Tool ideal = tool;
+  ideal.sensors = {};  // gains are applied to the outputs (integrate)
+  const fem::Sensors sensors(loaded, ideal);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(loaded.dofCount());
   // Load-cell functional c on the reactions (the sensor is linear in them).
   Eigen::VectorXd cell = Eigen::VectorXd::Zero(loaded.dofCount());
@@ -197,8 +211,8 @@ analysis::Recording integrate(const Basis& b, double scale, const study::Tool& t
     cell_prev = cell;
     cell = cell_next;
     rec.time_s.push_back(t0 + static_cast<double>(i) * dt);
-    rec.force.push_back(cell + b.residual_force_N);
-    rec.deformation.push_back(deformation);
+    rec.force.push_back((cell + b.residual_force_N) * tool.sensors.force_gain);
+    rec.deformation.push_back(deformation * tool.sensors.deformation_gain);
   }
   return rec;
 }
@@ -220,19 +234,16 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
   const study::Tool& tool = fem::deformableTool(study, "");
   const study::WeightDrop& drop = *study.weight_drop;
   const std::string tool_key = reductionKey(tool);
+  const auto& clamp = tool.constraints.clamp_rotational_stiffness_Nm_per_rad;
   const auto reduction = impl_->reductions.get(tool_key, [&] {
-    return Reduction{fem::reduce(fem::buildFullModel(tool)), tool.fem.youngs_Pa};
+    return Reduction{fem::reduce(fem::buildFullModel(tool)), tool.fem.youngs_Pa, clamp.value_or(0.0)};
   });
-  // The modes scale with E unless the clamp's springs (not scaled) are part of K: then the basis is
-  // built for this E (alpha and beta still reuse it).
-  const double scale = tool.fem.youngs_Pa / reduction->E_ref_Pa;
-  const bool springs = !reduction->model.constraints.springs.empty();
-  nlohmann::json basis_id = {tool_key, drop.mass_kg, drop.pan_rows_from_tip_m};
-  if (springs) basis_id.push_back(tool.fem.youngs_Pa);
-  const std::string basis_key = basis_id.dump();
-  const auto basis = impl_->bases.get(basis_key, [&] { return makeBasis(*reduction, tool, drop, springs ? scale : 1.0); });
+  std::string basis_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
+  if (clamp) basis_key += "|" + nlohmann::json(tool.fem.youngs_Pa).dump() + "|" + nlohmann::json(*clamp).dump();
+  const auto basis = impl_->bases.get(basis_key, [&] { return makeBasis(*reduction, tool, drop); });
   const auto steps = static_cast<long>(std::llround(drop.duration_s / study.fem.dt_s));
-  analysis::Recording rec = integrate(*basis, springs ? 1.0 : scale, tool, study.fem.dt_s, steps);
+  const double scale = clamp ? 1.0 : tool.fem.youngs_Pa / reduction->E_ref_Pa;  // a sprung basis is at the tool's E
+  analysis::Recording rec = integrate(*basis, scale, tool, study.fem.dt_s, steps);
   rec.key = key;
   rec.csv_path = "model run " + key.label();
   return rec;

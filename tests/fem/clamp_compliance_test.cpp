@@ -28,8 +28,8 @@ double proppedReaction(double P, double L, double a, double EI, double k) {
 }  // namespace
 
 TEST_CASE("a cantilever on a rotational clamp spring deflects by F L^3 / 3EI + F L^2 / k", "[fem]") {
-  // 340 x 10 x 4 mm steel strip, free length 300 mm (L/h = 75) as in the Euler-Bernoulli test of
-  // model_test.cpp; the load-cell line on the clamp edge adds nothing. Tolerance 2 % as there.
+  // 340 x 10 x 4 mm steel strip, free length 300 mm (L/h = 75) as in the rigid clamp's
+  // Euler-Bernoulli test; the load-cell line on the clamp edge adds nothing. Tolerance 2 % as there.
   study::Tool strip = testing::steelTool();
   strip.geometry.length_m = 0.340;
   strip.geometry.width_m = 0.010;

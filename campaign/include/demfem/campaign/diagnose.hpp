@@ -48,8 +48,18 @@
 
 namespace demfem::campaign {
 
+// The calibration settings of a diagnosis: one start (each cause fits one or two smooth
+// parameters), at most 60 evaluations, tolerance 1e-3 of the bounds (well inside the fits' scatter).
+inline CalibrationOptions diagnosisCalibration() {
+  CalibrationOptions o;
+  o.starts = 1;
+  o.max_evaluations = 60;
+  o.x_tolerance = 1e-3;
+  return o;
+}
+
 struct DiagnosisSettings {
-  CalibrationOptions calibration;
+  CalibrationOptions calibration = diagnosisCalibration();
   analysis::SignatureSettings signatures;
   SignatureTolerance tolerance;
   std::vector<std::string> causes;  // empty: every cause of the recordings' domains

@@ -5,7 +5,7 @@
 // adding one entry to causeCatalogue() in diagnose_causes.cpp.
 //
 // Contract
-// - Study files are JSON in file units (study-file.md); extend() never changes a number the
+// - Study files are JSON in file units (docs/study-file.md); extend() never changes a number the
 //   extension does not own, and the extended study at the returned start values is valid.
 // - match() reads the signatures only; it says whether the cause is plausible (its signature is
 //   present beyond the measured scatter) and gives the evidence in one sentence.

@@ -10,11 +10,12 @@
 // - run() is safe to call from several threads at once on one Model (concurrent cases).
 // - WeightDropModel (study kind weight-drop): fem::simulateWeightDrop's physics (Section 2.10.1,
 //   Eq 3-10) computed in the reduced model's modal basis. The reduction and the eigenvectors of
-//   (K_r, M_r + weight) are kept per (study without E, alpha, beta; mass): a change of E scales K_r
-//   and every squared natural frequency by the same factor, alpha and beta only change the modal
-//   damping (Eq 4 keeps the modes uncoupled), so a re-evaluation is one scalar three-level
-//   recursion (Eq 5-10) per mode (with a compliant clamp, whose springs do not scale with E, the
-//   modes are recomputed for each E). Equal to fem::simulateWeightDrop up to the transient of the modes
+//   (K_r, M_r + weight) are kept per (study without E, alpha, beta, sensor gains and the clamp
+//   spring's value; mass): a change of E scales K_r and every squared natural frequency by the same
+//   factor, alpha and beta only change the modal damping (Eq 4 keeps the modes uncoupled), gains
+//   scale the outputs, so a re-evaluation is one scalar three-level recursion (Eq 5-10) per mode; a
+//   clamp spring's value (and E with a spring) is set on the kept reduction exactly and costs one
+//   eigen solution per value. Equal to fem::simulateWeightDrop up to the transient of the modes
 //   beyond the lowest 40 (static correction keeps the static response exact), except that the record
 //   starts 0.1 s earlier, at rest, like a measured one: the weight is hung at t = 0.1 s (a step fit
 //   needs the baseline before the step).
