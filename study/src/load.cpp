@@ -35,6 +35,8 @@ namespace fs = std::filesystem;
 
 // Lengths are compared after the mm -> m conversion; this absorbs representation error only.
 constexpr double kLengthTolerance_m = 1e-12;
+// Highest coupling.max_simulate_s a study may ask for (one hour of simulated time per call).
+constexpr double kMaxSimulateLimitS = 3600.0;
 
 std::string mm(double metres) { return formatNumber(metres * 1e3) + " mm"; }
 
@@ -504,6 +506,12 @@ class StudyParser {
     }
     if (auto v = c.choice("force_averaging", detail::kForceAveraging, Need::Optional)) coupling.force_averaging = *v;
     if (auto v = c.quantity("timeout_s", positive(), Need::Optional)) coupling.timeout_s = *v;
+    if (auto v = c.quantity("max_simulate_s", leftOpen(0.0, kMaxSimulateLimitS), Need::Optional)) {
+      coupling.max_simulate_s = *v;
+      if (*v < study_.fem.dt_s)
+        issues_.add(c.pathOf("max_simulate_s"), "must be >= fem.dt_s (" + formatNumber(study_.fem.dt_s) +
+                                                    " s, the interval the FEM client asks for), got " + formatNumber(*v));
+    }
     c.finish();
   }
 

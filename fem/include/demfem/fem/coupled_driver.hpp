@@ -33,9 +33,9 @@
 //   interruption they are renamed too, the CSV gets a trailer line `# incomplete: REASON` and the
 //   sidecar "complete": false, "incomplete_reason": REASON; then the exception is rethrown
 //   (CoupledRunInterrupted for a stop request).
-// - Checkpoint/restart: every checkpoint_every steps the DEM writes
-//   output_dir/checkpoint/dem_STEP.ckpt (through the API, on the DEM's host; absolute path) and the
-//   driver then writes checkpoint/fem_state.bin (integrator state, step, output sizes), which
+// - Checkpoint/restart: every checkpoint_every steps the DEM writes the checkpoint NAMED
+//   dem_STEP.ckpt (through the API; the DEM server resolves it in its own checkpoint directory,
+//   which `demfem run` sets to output_dir/checkpoint) and the driver then writes checkpoint/fem_state.bin (integrator state, step, output sizes), which
 //   commits the pair. resume = true restores both, truncates the outputs to
 //   the checkpoint and continues; the result equals an uninterrupted run bit for bit.
 #pragma once

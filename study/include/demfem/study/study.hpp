@@ -204,10 +204,15 @@ struct DemSettings {
 
 enum class ForceAveraging { IntervalMean, Instantaneous };
 
+// Longest simulated time one simulate call may ask of a DEM server, unless the study raises it:
+// 1000 FEM steps of the paper's 1 ms.
+inline constexpr double kDefaultMaxSimulateS = 1.0;
+
 struct CouplingSettings {
   std::string endpoint;              // empty: chosen by `demfem run` (ipc://)
   ForceAveraging force_averaging = ForceAveraging::IntervalMean;
   double timeout_s = 30.0;
+  double max_simulate_s = kDefaultMaxSimulateS;
   bool operator==(const CouplingSettings&) const = default;
 };
 
