@@ -35,7 +35,8 @@ struct Issue {
 };
 
 // Thrown by loadStudy()/parseStudy() with every problem found, not just the first. what() lists them
-// as "FILE: PATH: MESSAGE" lines ("FILE: MESSAGE" when the path is empty).
+// as "FILE: PATH: MESSAGE" lines ("FILE: MESSAGE" when the path is empty). File, paths and messages
+// are valid UTF-8 (bytes that are not are written as \xNN).
 class StudyError : public std::runtime_error {
  public:
   StudyError(std::string file, std::vector<Issue> issues);
@@ -271,6 +272,10 @@ std::string soilHash(const Study& study);
 
 // True for the kinds that simulate soil (coupled, dem-only, cone-penetration).
 bool hasSoil(StudyKind kind);
+
+// `text` with every byte that is not part of a well-formed UTF-8 sequence written as \xNN: file
+// names and quoted file content can then always be printed and stored in JSON reports.
+std::string validUtf8(std::string_view text);
 
 // FNV-1a 64-bit hash of `bytes` (offset basis 14695981039346656037, prime 1099511628211), the hash
 // soilHash() applies to its canonical text.
