@@ -2,6 +2,7 @@
 
 #include <zmq_addon.hpp>
 
+#include <cstring>
 #include <fstream>
 #include <regex>
 #include <stdexcept>
@@ -201,7 +202,7 @@ ClientSocket::ClientSocket(zmq::context_t& context, const std::string& endpoint,
   const std::string monitor_endpoint = "inproc://demfem-client-monitor-" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
   if (zmq_socket_monitor(socket_.handle(), monitor_endpoint.c_str(),
                          ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-                             ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL) != 0)
+                             ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_DISCONNECTED) != 0)
     throw std::runtime_error(std::string("zmq_socket_monitor failed: ") + zmq_strerror(zmq_errno()));
   monitor_ = zmq::socket_t(context, zmq::socket_type::pair);
   monitor_.set(zmq::sockopt::linger, 0);
@@ -244,6 +245,12 @@ Multipart ClientSocket::request(const Multipart& request) {
       std::vector<zmq::message_t> event;
       (void)zmq::recv_multipart(monitor_, std::back_inserter(event));
       broken_ = true;
+      // Frame 0 of a monitor event: u16 event id, u32 value.
+      std::uint16_t id = 0;
+      if (!event.empty() && event[0].size() >= sizeof id) std::memcpy(&id, event[0].data(), sizeof id);
+      if (id == ZMQ_EVENT_DISCONNECTED)
+        throw ProtocolError(WireError::PeerGone, "the DEM server at " + endpoint_ +
+                                                     " closed the connection (it stopped or crashed); no reply will come");
       throw ProtocolError(WireError::PeerGone,
                           "the server at " + endpoint_ +
                               " refused the connection during the security handshake (wrong or missing "

@@ -66,6 +66,25 @@ TEST_CASE("a client whose server never answers times out with a message saying t
   CHECK_THROWS_AS(client.request({"{}"}), ProtocolError);
 }
 
+TEST_CASE("a server that goes away while a request is pending fails it at once, not after the timeout", "[protocol]") {
+  zmq::context_t context(1);
+  auto server = std::make_unique<ServerSocket>(context, "tcp://127.0.0.1:*");
+  ClientSocket client(context, server->endpoint(), 20s);
+  std::thread closer([&] {
+    if (server->receive(5s)) server.reset();  // takes the request, never answers, closes
+  });
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    client.request({"{}"});
+    FAIL("a reply from a closed server");
+  } catch (const ProtocolError& e) {
+    CHECK(e.code() == WireError::PeerGone);
+    CHECK_THAT(e.what(), Catch::Contains("closed the connection"));
+  }
+  CHECK(std::chrono::steady_clock::now() - start < 5s);
+  closer.join();
+}
+
 TEST_CASE("a server receive returns nothing after its timeout", "[protocol]") {
   zmq::context_t context(1);
   ServerSocket server(context, "inproc://idle");

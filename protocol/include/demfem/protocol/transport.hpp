@@ -19,6 +19,8 @@
 //   server.secret and client.pub (the only client key it accepts, checked by a ZAP handler); the
 //   client needs server.pub, client.pub and client.secret. A client with another key is refused:
 //   its request() throws ProtocolError(PeerGone) naming the refusal.
+// - A server that closes the connection (it stopped or crashed) makes the pending or next request()
+//   throw ProtocolError(PeerGone) at once instead of waiting for the timeout.
 // - Frames above kMaxFrameBytes are dropped by ZeroMQ (ZMQ_MAXMSGSIZE) before they reach the codec.
 #pragma once
 
