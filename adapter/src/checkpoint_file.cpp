@@ -1,10 +1,10 @@
 #include "demfem/adapter/checkpoint_file.hpp"
 
+#include "demfem/adapter/output_files.hpp"
+
 #include "demfem/study/study.hpp"
 
-#include <cerrno>
 #include <cstring>
-#include <cstdio>
 #include <fstream>
 
 namespace demfem::adapter {
@@ -70,25 +70,10 @@ std::string checkpointPayload(const std::string& image, const std::string& kind,
 }
 
 void writeCheckpointFile(const std::filesystem::path& file, const std::string& kind, const std::string& payload) {
-  const std::string image = checkpointImage(kind, payload);
-  const std::filesystem::path part = file.string() + ".part";
-  const auto fail = [&](const std::string& step) {
-    const int error = errno;
-    std::error_code ignored;
-    std::filesystem::remove(part, ignored);
-    throw CouplingError(ErrorCode::Internal, "writing checkpoint " + file.string() + " failed at " + step +
-                                                 (error ? std::string(": ") + std::strerror(error) : std::string()));
-  };
-  errno = 0;
-  std::FILE* out = std::fopen(part.c_str(), "wb");
-  if (!out) fail("opening " + part.string());
-  const bool written = std::fwrite(image.data(), 1, image.size(), out) == image.size() && std::fflush(out) == 0;
-  if (std::fclose(out) != 0 || !written) fail(written ? "closing " + part.string() : "writing " + part.string());
-  std::error_code error;
-  std::filesystem::rename(part, file, error);
-  if (error) {
-    errno = error.value();
-    fail("renaming " + part.string());
+  try {
+    writeFileAtomically(file, checkpointImage(kind, payload));
+  } catch (const OutputError& e) {
+    throw CouplingError(ErrorCode::Internal, std::string("writing checkpoint failed: ") + e.what());
   }
 }
 

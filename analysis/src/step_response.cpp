@@ -4,31 +4,23 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 
 namespace demfem::analysis {
 
-StepResponse analyseStepResponse(const std::vector<double>& t, const std::vector<double>& y, const StepResponseSettings& settings,
-                                 const std::string& what) {
-  const std::size_t n = y.size();
-  const auto tail_count = std::max(settings.min_tail_samples, static_cast<std::size_t>(settings.steady_fraction * static_cast<double>(n)));
-  if (n < 3 * tail_count)
-    throw InputError(what + ": only " + std::to_string(n) + " samples; the steady value needs the last " + std::to_string(tail_count) +
-                     " and the cycles before them need at least twice as many");
-  StepResponse response;
-  const std::vector<double> tail(y.end() - static_cast<std::ptrdiff_t>(tail_count), y.end());
-  const SignalStatistics steady = meanAndStdDev(tail);
-  response.steady_value = steady.mean;
-  response.steady_std = steady.std_dev;
+namespace {
 
-  const double direction = steady.mean >= y.front() ? 1.0 : -1.0;
-  std::vector<double> e(n);
-  for (std::size_t i = 0; i < n; ++i) e[i] = direction * (y[i] - steady.mean);
-  const double largest_overshoot = *std::max_element(e.begin(), e.end());
-  if (!(largest_overshoot > 0.0)) throw InputError(what + ": the response never overshoots its steady value: no cycles to measure");
-  const double band = std::max(settings.noise_band_factor * steady.std_dev, settings.min_amplitude_fraction * largest_overshoot);
+// Sample standard deviation; NaN below two values.
+double spread(const std::vector<double>& values) {
+  return values.size() < 2 ? std::numeric_limits<double>::quiet_NaN() : meanAndStdDev(values).std_dev;
+}
 
+// The cycle-by-cycle part of analyseStepResponse (header comment) on e = +-(y - y_ss).
+void countCycles(const std::vector<double>& t, const std::vector<double>& e, double band, double steady, double direction,
+                 StepResponse& response) {
+  const std::size_t n = e.size();
   enum class State { Unknown, Below, Above } state = State::Unknown;
   std::size_t peak_index = 0;
   std::vector<double> peak_amplitudes;
@@ -58,33 +50,37 @@ StepResponse analyseStepResponse(const std::vector<double>& t, const std::vector
           }
         }
         response.peak_times_s.push_back(peak_time);
-        response.peak_values.push_back(steady.mean + direction * peak_e);
+        response.peak_values.push_back(steady + direction * peak_e);
         peak_amplitudes.push_back(peak_e);
         state = State::Below;
       }
     }
     if (state == State::Unknown && e[i] < -band) state = State::Below;
   }
-
-  std::vector<double>& frequencies = response.cycle_frequencies_Hz;
-  std::vector<double>& damping_ratios = response.cycle_damping_ratios;
   const auto& u = response.upward_crossing_times_s;
-  for (std::size_t k = 1; k < u.size(); ++k) frequencies.push_back(1.0 / (u[k] - u[k - 1]));
+  for (std::size_t k = 1; k < u.size(); ++k) response.cycle_frequencies_Hz.push_back(1.0 / (u[k] - u[k - 1]));
   for (std::size_t k = 1; k < peak_amplitudes.size(); ++k) {
     const double delta = std::log(peak_amplitudes[k - 1] / peak_amplitudes[k]);  // logarithmic decrement
-    damping_ratios.push_back(delta / std::sqrt(4.0 * std::numbers::pi * std::numbers::pi + delta * delta));
+    response.cycle_damping_ratios.push_back(delta / std::sqrt(4.0 * std::numbers::pi * std::numbers::pi + delta * delta));
   }
-  if (frequencies.size() < settings.min_cycles || damping_ratios.size() < settings.min_cycles)
-    throw InputError(what + ": only " + std::to_string(frequencies.size()) + " full cycles and " + std::to_string(peak_amplitudes.size()) +
-                     " peaks rise above the noise band +-" + std::to_string(band) + " around the steady value " + std::to_string(steady.mean) +
-                     " (need " + std::to_string(settings.min_cycles) + " periods and " + std::to_string(settings.min_cycles + 1) + " peaks)");
-  const SignalStatistics f = meanAndStdDev(frequencies);
-  const SignalStatistics z = meanAndStdDev(damping_ratios);
-  response.frequency_mean_Hz = f.mean;
-  response.frequency_std_Hz = f.std_dev;
-  response.damping_ratio_mean = z.mean;
-  response.damping_ratio_std = z.std_dev;
-  response.first_peak_time_s = response.peak_times_s.front();
+}
+
+}  // namespace
+
+StepResponse analyseStepResponse(const std::vector<double>& t, const std::vector<double>& y, const StepResponseSettings& settings,
+                                 const std::string& what) {
+  StepResponse response;
+  response.fit = fitStepResponse(t, y, what);
+  const StepResponseFit& fit = response.fit;
+  response.first_peak_time_s = fit.step_time_s + 0.5 / fit.frequency_Hz;
+  const double direction = fit.steady >= fit.initial ? 1.0 : -1.0;
+  std::vector<double> e(y.size());
+  for (std::size_t i = 0; i < y.size(); ++i) e[i] = direction * (y[i] - fit.steady);
+  const double largest_overshoot = *std::max_element(e.begin(), e.end());
+  const double band = std::max(settings.noise_band_factor * fit.residual_rms, settings.min_amplitude_fraction * largest_overshoot);
+  countCycles(t, e, band, fit.steady, direction, response);
+  response.cycle_frequency_std_Hz = spread(response.cycle_frequencies_Hz);
+  response.cycle_damping_ratio_std = spread(response.cycle_damping_ratios);
   return response;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 namespace demfem::analysis {
@@ -29,14 +30,25 @@ CalibrationRun analyseCalibrationRun(const Recording& rec, const AnalysisSetting
   return run;
 }
 
+// Fitted values averaged over the repeats; the spread over all their cycles (Fig. 8).
+SignalStatistics fittedWithCycleSpread(const std::vector<double>& fitted, const std::vector<double>& cycles) {
+  SignalStatistics s;
+  s.mean = meanAndStdDev(fitted).mean;
+  s.samples = cycles.size();
+  s.std_dev = cycles.size() < 2 ? std::numeric_limits<double>::quiet_NaN() : meanAndStdDev(cycles).std_dev;
+  return s;
+}
+
 ResponseSummary summarise(const std::vector<const StepResponse*>& responses) {
-  std::vector<double> steady, frequencies, damping;
+  std::vector<double> steady, frequencies, damping, cycle_frequencies, cycle_damping;
   for (const StepResponse* r : responses) {
-    steady.push_back(r->steady_value);
-    frequencies.insert(frequencies.end(), r->cycle_frequencies_Hz.begin(), r->cycle_frequencies_Hz.end());
-    damping.insert(damping.end(), r->cycle_damping_ratios.begin(), r->cycle_damping_ratios.end());
+    steady.push_back(r->fit.steady);
+    frequencies.push_back(r->fit.frequency_Hz);
+    damping.push_back(r->fit.damping_ratio);
+    cycle_frequencies.insert(cycle_frequencies.end(), r->cycle_frequencies_Hz.begin(), r->cycle_frequencies_Hz.end());
+    cycle_damping.insert(cycle_damping.end(), r->cycle_damping_ratios.begin(), r->cycle_damping_ratios.end());
   }
-  return {meanAndStdDev(steady), meanAndStdDev(frequencies), meanAndStdDev(damping)};
+  return {meanAndStdDev(steady), fittedWithCycleSpread(frequencies, cycle_frequencies), fittedWithCycleSpread(damping, cycle_damping)};
 }
 
 // The window segment of a run's curve as a time series of one signal.

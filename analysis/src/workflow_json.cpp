@@ -29,7 +29,7 @@ json settingsJson(const AnalysisSettings& settings) {
           {"end_signal", e.end_signal == EndSignal::Force ? "force" : "deformation"},
           {"window_begin_mm", e.window_begin_mm},
           {"window_end_mm", e.window_end_mm},
-          {"steady_fraction", settings.step_response.steady_fraction},
+          {"noise_band_factor", settings.step_response.noise_band_factor},
           {"fft_low_Hz", number(settings.fft_low_Hz)},
           {"fft_high_Hz", number(settings.fft_high_Hz)}};
 }
@@ -65,12 +65,18 @@ json pooledJson(const PooledCase& c) {
 }
 
 json responseJson(const StepResponse& r, const std::string& unit) {
-  return {{"steady_value_" + unit, number(r.steady_value)},
-          {"steady_std_" + unit, number(r.steady_std)},
-          {"frequency_mean_Hz", number(r.frequency_mean_Hz)},
-          {"frequency_std_Hz", number(r.frequency_std_Hz)},
-          {"damping_ratio_mean", number(r.damping_ratio_mean)},
-          {"damping_ratio_std", number(r.damping_ratio_std)},
+  const StepResponseFit& f = r.fit;
+  return {{"steady_value_" + unit, number(f.steady)},
+          {"steady_error_" + unit, number(f.steady_error)},
+          {"initial_value_" + unit, number(f.initial)},
+          {"step_time_s", number(f.step_time_s)},
+          {"frequency_Hz", number(f.frequency_Hz)},
+          {"frequency_error_Hz", number(f.frequency_error_Hz)},
+          {"frequency_cycle_std_Hz", number(r.cycle_frequency_std_Hz)},
+          {"damping_ratio", number(f.damping_ratio)},
+          {"damping_ratio_error", number(f.damping_ratio_error)},
+          {"damping_ratio_cycle_std", number(r.cycle_damping_ratio_std)},
+          {"residual_rms_" + unit, number(f.residual_rms)},
           {"periods", r.cycle_frequencies_Hz.size()},
           {"decrements", r.cycle_damping_ratios.size()},
           {"first_peak_time_s", number(r.first_peak_time_s)}};

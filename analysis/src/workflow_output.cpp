@@ -73,7 +73,10 @@ std::string markdown(const std::vector<std::string>& header, const std::vector<s
   return out.str();
 }
 
-std::string plusMinus(double mean, double spread, int digits = 4) { return shortNum(mean, digits) + " ± " + shortNum(spread, 3); }
+// "mean ± spread"; just the mean when the spread is undefined (NaN).
+std::string plusMinus(double mean, double spread, int digits = 4) {
+  return std::isfinite(spread) ? shortNum(mean, digits) + " ± " + shortNum(spread, 3) : shortNum(mean, digits);
+}
 
 std::string runName(const CaseKey& key, int repeat) { return key.label() + "_r" + std::to_string(repeat); }
 
@@ -209,15 +212,18 @@ Figure historyFigure(const CaseKey& key, const std::vector<const CalibrationRun*
   return figure;
 }
 
+// Error segment of a bar: none (0) when the spread is undefined.
+double errorBar(const SignalStatistics& s) { return std::isfinite(s.std_dev) ? s.std_dev : 0.0; }
+
 // Fig. 8: steady value, frequency and damping ratio, measured against simulated.
 Figure responseFigure(const CalibrationComparison& c) {
   Figure figure;
-  figure.title = c.key.title() + ": steady value, frequency, damping ratio (error bars: standard deviation over cycles)";
+  figure.title = c.key.title() + ": steady value, frequency, damping ratio (bars: fitted to the whole records; error bars: standard deviation over cycles)";
   figure.columns = 3;
   figure.row_height_px = 340;
   const auto bars = [&](const std::string& title, const std::string& unit, const SignalStatistics& m, const SignalStatistics& s) {
     return BarPanel{title, unit, {c.key.title()},
-                    {BarGroup{"measured", kMeasuredColor, {m.mean}, {m.std_dev}}, BarGroup{"simulated", kSimulatedColor, {s.mean}, {s.std_dev}}}};
+                    {BarGroup{"measured", kMeasuredColor, {m.mean}, {errorBar(m)}}, BarGroup{"simulated", kSimulatedColor, {s.mean}, {errorBar(s)}}}};
   };
   figure.panels = {bars("a.1) deformation: steady value", "deformation (mm)", c.measured.deformation.steady, c.simulated.deformation.steady),
                    bars("a.2) deformation: frequency", "frequency (Hz)", c.measured.deformation.frequency_Hz, c.simulated.deformation.frequency_Hz),
@@ -337,25 +343,28 @@ std::string writeEvaluationTables(const EvaluationResult& result, StagedOutput& 
   }
   if (!result.calibration_runs.empty()) {
     Table runs;
-    runs.header = {"case", "tool", "mass_kg", "repeat", "source", "signal", "steady_value", "steady_std", "frequency_mean_Hz", "frequency_std_Hz",
-                   "periods", "damping_ratio_mean", "damping_ratio_std", "decrements", "first_peak_time_s"};
+    runs.header = {"case", "tool", "mass_kg", "repeat", "source", "signal", "steady_value", "steady_error", "frequency_Hz", "frequency_error_Hz",
+                   "frequency_cycle_std_Hz", "periods", "damping_ratio", "damping_ratio_error", "damping_ratio_cycle_std", "decrements",
+                   "residual_rms", "step_time_s", "first_peak_time_s"};
     std::vector<std::vector<std::string>> md_rows;
     for (const auto& r : result.calibration_runs) {
       for (const auto& [signal, response] : {std::pair<std::string, const StepResponse*>{"force_N", &r.force}, {"deformation_mm", &r.deformation}}) {
-        runs.rows.push_back({r.key.label(), r.key.tool, num(r.key.mass_kg), std::to_string(r.repeat), r.source.string(), signal,
-                             num(response->steady_value), num(response->steady_std), num(response->frequency_mean_Hz),
-                             num(response->frequency_std_Hz), std::to_string(response->cycle_frequencies_Hz.size()),
-                             num(response->damping_ratio_mean), num(response->damping_ratio_std),
-                             std::to_string(response->cycle_damping_ratios.size()), num(response->first_peak_time_s)});
-        md_rows.push_back({r.key.title(), std::to_string(r.repeat), signal, shortNum(response->steady_value),
-                           plusMinus(response->frequency_mean_Hz, response->frequency_std_Hz) + " (" +
+        const StepResponseFit& f = response->fit;
+        runs.rows.push_back({r.key.label(), r.key.tool, num(r.key.mass_kg), std::to_string(r.repeat), r.source.string(), signal, num(f.steady),
+                             num(f.steady_error), num(f.frequency_Hz), num(f.frequency_error_Hz), num(response->cycle_frequency_std_Hz),
+                             std::to_string(response->cycle_frequencies_Hz.size()), num(f.damping_ratio), num(f.damping_ratio_error),
+                             num(response->cycle_damping_ratio_std), std::to_string(response->cycle_damping_ratios.size()), num(f.residual_rms),
+                             num(f.step_time_s), num(response->first_peak_time_s)});
+        md_rows.push_back({r.key.title(), std::to_string(r.repeat), signal, shortNum(f.steady),
+                           plusMinus(f.frequency_Hz, response->cycle_frequency_std_Hz) + " (" +
                                std::to_string(response->cycle_frequencies_Hz.size()) + ")",
-                           plusMinus(response->damping_ratio_mean, response->damping_ratio_std) + " (" +
+                           plusMinus(f.damping_ratio, response->cycle_damping_ratio_std) + " (" +
                                std::to_string(response->cycle_damping_ratios.size()) + ")"});
       }
     }
     out.writeText("calibration_runs.csv", runs.csv());
-    md << "### Calibration-weight runs\n\nFrequency and damping ratio: mean ± standard deviation over the cycles (count in brackets).\n\n"
+    md << "### Calibration-weight runs\n\nSteady value, frequency and damping ratio fitted to the whole record (damped step response); ± the "
+          "standard deviation over the cycles (count in brackets).\n\n"
        << markdown({"case", "repeat", "signal", "steady value", "frequency (Hz)", "damping ratio"}, md_rows) << "\n";
   }
   return md.str();

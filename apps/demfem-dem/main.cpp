@@ -27,6 +27,7 @@ struct Options {
   std::string endpoint_file;
   std::string checkpoint_dir;
   double max_simulate_s = 0;  // 0: the study's coupling.max_simulate_s
+  std::string output_dir;
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
   adapter::TestLoad load;
@@ -62,6 +63,7 @@ void run(const Options& o) {
   }
   std::optional<study::Study> study;
   if (!o.study_file.empty()) study = study::loadStudy(o.study_file);
+  if (study && !o.output_dir.empty()) study->output.directory = o.output_dir;
   const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : "builtin";
 #if DEMFEM_WITH_LIGGGHTS
   if (backend == "liggghts" && !liggghts::isLeaderRank()) {
@@ -131,6 +133,7 @@ int main(int argc, char** argv) {
   app.add_option("--max-simulate-s", o.max_simulate_s,
                  "Longest simulate call accepted (s); default: the study's coupling.max_simulate_s, else 1")
       ->check(CLI::PositiveNumber);
+  app.add_option("--output", o.output_dir, "Directory of the DEM's own files (builtin: VTK); default: the study's output.directory");
   app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")
       ->check(CLI::PositiveNumber);
   app.add_option("--idle-timeout-s", o.idle_timeout_s,

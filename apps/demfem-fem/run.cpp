@@ -119,10 +119,15 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
   }
   dem.shutdown();
 
-  std::printf("coupled run of '%s' against DEM backend '%s' complete (%s tool)\n", study.name.c_str(),
-              summary.backend.c_str(), summary.rigid_tool ? "rigid" : "deformable");
-  std::printf("  FEM steps            %lld (%lld in the drag phase)\n", static_cast<long long>(summary.steps),
-              static_cast<long long>(summary.drag_steps));
+  if (summary.complete)
+    std::printf("coupled run of '%s' against DEM backend '%s' complete (%s tool)\n", study.name.c_str(),
+                summary.backend.c_str(), summary.rigid_tool ? "rigid" : "deformable");
+  else
+    std::printf("coupled run of '%s' against DEM backend '%s' %s (%s tool): outputs marked incomplete\n",
+                study.name.c_str(), summary.backend.c_str(), summary.incomplete_reason.c_str(),
+                summary.rigid_tool ? "rigid" : "deformable");
+  std::printf("  FEM steps            %lld of %lld (%lld in the drag phase)\n", static_cast<long long>(summary.steps),
+              static_cast<long long>(summary.planned_steps), static_cast<long long>(summary.drag_steps));
   std::printf("  simulated time       %.6g s\n", summary.simulated_time_s);
   std::printf("  wall time            %.3g s\n", summary.wall_time_s);
   std::printf("  mean load-cell force %.6g N (max %.6g N)\n", summary.mean_force_N, summary.max_force_N);
@@ -131,8 +136,10 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
   writeJson(json_target, {{"study", study.name},
                           {"backend", summary.backend},
                           {"rigid_tool", summary.rigid_tool},
-                          {"complete", true},
+                          {"complete", summary.complete},
+                          {"incomplete_reason", summary.incomplete_reason},
                           {"steps", summary.steps},
+                          {"planned_steps", summary.planned_steps},
                           {"drag_steps", summary.drag_steps},
                           {"simulated_time_s", summary.simulated_time_s},
                           {"wall_time_s", summary.wall_time_s},
@@ -155,7 +162,7 @@ void addFemRunCommand(CLI::App& app) {
   cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
   cmd->add_option("--timeout-s", o->timeout_s, "Seconds to wait for any DEM reply; default: the study's coupling.timeout_s")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (insertion + drag); default: the whole stroke")
+  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (insertion + drag; outputs then marked incomplete); default: the whole plan")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Write a coupled checkpoint every N FEM steps")
       ->check(CLI::PositiveNumber);

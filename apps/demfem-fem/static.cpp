@@ -39,7 +39,7 @@ void addFemStaticCommand(CLI::App& app) {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(model.dofCount());
     for (int k : loaded) f(3 * k + 2) = -total / static_cast<double>(loaded.size());
     const fem::StaticSolution s = fem::solveStatic(model, f);
-    const fem::SensorReadings reading = fem::Sensors(model, tool.constraints.sensor_from_top_m).read(s.displacement, s.reaction);
+    const fem::SensorReadings reading = fem::Sensors(model, tool).read(s.displacement, s.reaction);
     double tip_deflection = 0;
     for (int k : tip_row) tip_deflection -= s.displacement(3 * k + 2) / static_cast<double>(tip_row.size());
     Eigen::Vector3d total_reaction = Eigen::Vector3d::Zero();

@@ -29,10 +29,6 @@ inline void addAnalysisOptions(CLI::App& cmd, AnalysisOptions& options) {
       ->check(CLI::IsMember({"force", "deformation"}))
       ->capture_default_str();
   cmd.add_option("--baseline-s", e.baseline_duration_s, "Leading span averaged for the initial deformation value (s)")->capture_default_str();
-  cmd.add_option("--steady-fraction", options.settings.step_response.steady_fraction,
-                 "Final fraction of a calibration-weight run averaged for its steady value")
-      ->check(CLI::Range(0.01, 0.9))
-      ->capture_default_str();
   cmd.add_flag("--no-plots", options.no_plots, "Do not draw plots (the report says so)");
   cmd.add_option("--gnuplot", options.gnuplot, "gnuplot executable used for the SVG plots")->capture_default_str();
 }

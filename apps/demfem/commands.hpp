@@ -9,4 +9,5 @@ void addRunCommand(CLI::App& app);       // run.cpp
 void addDepositCommand(CLI::App& app);   // deposit.cpp
 void addEvaluateCommand(CLI::App& app);  // evaluate.cpp
 void addCompareCommand(CLI::App& app);   // compare.cpp
+void addCalibrateCommand(CLI::App& app); // calibrate.cpp
 }  // namespace demfem::cli

@@ -13,5 +13,6 @@ int main(int argc, char** argv) {
   demfem::cli::addDepositCommand(app);
   demfem::cli::addEvaluateCommand(app);
   demfem::cli::addCompareCommand(app);
+  demfem::cli::addCalibrateCommand(app);
   return demfem::cli::runApp(app, argc, argv);
 }

@@ -190,6 +190,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   std::vector<std::string> dem_args{dem_exe.string(), "--study", o.study_file, "--bind", endpoint, "--endpoint-file",
                                     endpoint_file.string()};
   if (!o.backend.empty()) dem_args.insert(dem_args.end(), {"--backend", o.backend});
+  if (!o.output_dir.empty()) dem_args.insert(dem_args.end(), {"--output", o.output_dir});
   if (o.checkpoint_every > 0 || o.resume) {
     // The DEM keeps its checkpoints next to the FEM's (fem/coupled_driver.hpp names them).
     const fs::path output = !o.output_dir.empty() ? fs::path(o.output_dir) : study.output.directory;
@@ -251,7 +252,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("study", o->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
-  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps")->check(CLI::PositiveNumber);
+  cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (outputs then marked incomplete)")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");

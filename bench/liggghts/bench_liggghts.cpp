@@ -10,7 +10,7 @@
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/liggghts/backend.hpp"
-#include "demfem/backends/liggghts/tool_drive.hpp"
+#include "demfem/adapter/tool_drive.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
 
@@ -94,7 +94,7 @@ study::Study benchStudy(const std::string& file, std::uint64_t seed, int cores) 
 // sized, as a coupled run does).
 RunResult drag(adapter::CouplingApi& dem, const study::Study& s, double window_s, std::int64_t particles) {
   const auto& tool = s.tools.front();
-  liggghts::insertAndStartDrag(dem, s, tool);
+  adapter::insertAndStartDrag(dem, s, tool);
   const double interval = g_interval_s > 0 ? g_interval_s : (s.fem.dt_s > 0 ? s.fem.dt_s : 1e-3);
   const auto intervals = std::max<long>(1, std::lround(window_s / interval));
   const double t0 = dem.time();

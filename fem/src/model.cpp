@@ -212,6 +212,20 @@ Eigen::VectorXd solveRefined(const Solver& solver, const Matrix& A, const Eigen:
   return x;
 }
 
+// The compliant clamp's springs: `springs` holds (y DOF, squared lever arm (z - z_mid)^2); each
+// gets the stiffness k_theta / sum of the squared arms (moment k_theta theta for a rotation theta),
+// which replaces the arm in `springs`, and is added to the diagonal of K.
+void addClampSprings(SparseMatrix& K, std::vector<std::pair<int, double>>& springs, double k_theta_Nm_per_rad) {
+  double arm_sum = 0;
+  for (const auto& [dof, arm2] : springs) arm_sum += arm2;
+  if (springs.empty() || !(arm_sum > 0))
+    throw std::invalid_argument("compliant clamp: the clamp edge row has no keypoint off the mid-plane to carry the rotational spring");
+  for (auto& [dof, stiffness] : springs) {
+    stiffness = k_theta_Nm_per_rad / arm_sum;
+    K.coeffRef(dof, dof) += stiffness;
+  }
+}
+
 }  // namespace
 
 std::vector<int> ReducedModel::freeDofs() const { return complement(dofCount(), constraints.fixed_dofs); }
@@ -227,11 +241,18 @@ void applyToolConstraints(FullModel& model, const study::ToolConstraints& constr
   requireKeypointRow(model, clamp_edge, "the clamp's lower edge (clamp_length " + std::to_string(constraints.clamp_length_m) + " m)");
   requireKeypointRow(model, load_cell_y, "the load-cell line (load_cell_from_top " + std::to_string(constraints.load_cell_from_top_m) + " m)");
   Constraints c;
+  const auto& rotational = constraints.clamp_rotational_stiffness_Nm_per_rad;
+  const double z_mid = 0.5 * (back + model.keypoints.col(2).maxCoeff());
   for (Eigen::Index k = 0; k < model.keypoints.rows(); ++k) {
     const int node = model.keypoint_nodes[static_cast<std::size_t>(k)];
     const double y = model.keypoints(k, 1), z = model.keypoints(k, 2);
-    if (y >= clamp_edge - kRowTolerance_m)
+    if (!rotational && y >= clamp_edge - kRowTolerance_m)
       for (int d = 0; d < 3; ++d) c.fixed_dofs.push_back(3 * node + d);
+    if (rotational && std::abs(y - clamp_edge) <= kRowTolerance_m) {
+      c.fixed_dofs.push_back(3 * node);      // pinned edge: x and z fixed,
+      c.fixed_dofs.push_back(3 * node + 2);  // y held by the spring below
+      if (std::abs(z - z_mid) > kRowTolerance_m) c.springs.emplace_back(3 * node + 1, (z - z_mid) * (z - z_mid));
+    }
     if (std::abs(y - load_cell_y) <= kRowTolerance_m && std::abs(z - back) <= kRowTolerance_m) {
       c.load_cell_dofs.push_back(3 * node + 2);
       c.fixed_dofs.push_back(3 * node + 2);
@@ -240,6 +261,7 @@ void applyToolConstraints(FullModel& model, const study::ToolConstraints& constr
   std::sort(c.fixed_dofs.begin(), c.fixed_dofs.end());
   c.fixed_dofs.erase(std::unique(c.fixed_dofs.begin(), c.fixed_dofs.end()), c.fixed_dofs.end());
   std::sort(c.load_cell_dofs.begin(), c.load_cell_dofs.end());
+  if (rotational) addClampSprings(model.K, c.springs, *rotational);
   model.constraints = std::move(c);
 }
 
@@ -337,6 +359,9 @@ FullModel readMatrixMarketModel(const std::filesystem::path& mass_file, const st
   if (explicit_constraints.fixed_dofs.empty()) {
     applyToolConstraints(model, constraints);
   } else {
+    if (constraints.clamp_rotational_stiffness_Nm_per_rad)
+      throw std::runtime_error(keypoint_file.string() + ": lists explicit fix/load_cell constraints, so the study's "
+                               "clamp_rotational_stiffness_Nm_per_rad cannot be placed; remove one of them");
     for (auto* v : {&explicit_constraints.fixed_dofs, &explicit_constraints.load_cell_dofs}) {
       std::sort(v->begin(), v->end());
       v->erase(std::unique(v->begin(), v->end()), v->end());
@@ -380,6 +405,8 @@ ReducedModel reduce(const FullModel& model) {
   r.length_m = model.length_m;
   for (int dof : model.constraints.fixed_dofs) r.constraints.fixed_dofs.push_back(keypoint_dof_of[static_cast<std::size_t>(dof)]);
   for (int dof : model.constraints.load_cell_dofs) r.constraints.load_cell_dofs.push_back(keypoint_dof_of[static_cast<std::size_t>(dof)]);
+  for (const auto& [dof, stiffness] : model.constraints.springs)  // on keypoints by construction
+    r.constraints.springs.emplace_back(keypoint_dof_of[static_cast<std::size_t>(dof)], stiffness);
   std::sort(r.constraints.fixed_dofs.begin(), r.constraints.fixed_dofs.end());
   std::sort(r.constraints.load_cell_dofs.begin(), r.constraints.load_cell_dofs.end());
 

@@ -34,6 +34,14 @@ void addRowMean(std::vector<std::pair<int, double>>& weights, const std::vector<
   for (int k : row) weights.emplace_back(3 * k + 2, scale / static_cast<double>(row.size()));
 }
 
+std::vector<int> loadCellZDofs(const ReducedModel& model) {
+  std::vector<int> dofs;
+  for (int dof : model.constraints.load_cell_dofs)
+    if (dof % 3 == 2) dofs.push_back(dof);
+  if (dofs.empty()) throw std::invalid_argument("sensors: the model has no load-cell z constraint");
+  return dofs;
+}
+
 double weighted(const std::vector<std::pair<int, double>>& weights, const Eigen::VectorXd& v) {
   double sum = 0;
   for (const auto& [dof, w] : weights) sum += w * v(dof);
@@ -42,10 +50,9 @@ double weighted(const std::vector<std::pair<int, double>>& weights, const Eigen:
 
 }  // namespace
 
-Sensors::Sensors(const ReducedModel& model, double sensor_from_top_m) {
-  for (int dof : model.constraints.load_cell_dofs)
-    if (dof % 3 == 2) load_cell_z_dofs_.push_back(dof);
-  if (load_cell_z_dofs_.empty()) throw std::invalid_argument("sensors: the model has no load-cell z constraint");
+Sensors::Sensors(const ReducedModel& model, const study::Tool& tool)
+    : load_cell_z_dofs_(loadCellZDofs(model)), gains_(tool.sensors) {
+  const double sensor_from_top_m = tool.constraints.sensor_from_top_m;
   const auto rows = rowsOf(model);
   if (rows.size() < 2) throw std::invalid_argument("sensors: the model needs at least two keypoint rows along y");
   const double top = rows.back().first;
@@ -71,9 +78,19 @@ Sensors::Sensors(const ReducedModel& model, double sensor_from_top_m) {
 SensorReadings Sensors::read(const Eigen::VectorXd& displacement, const Eigen::VectorXd& reactions) const {
   SensorReadings s;
   for (int dof : load_cell_z_dofs_) s.load_cell_N += reactions(dof);
-  s.deformation_mm = -1000 * weighted(sensor_z_weights_, displacement);
+  s.deformation_mm = -1000 * weighted(sensor_z_weights_, displacement) * gains_.deformation_gain;
+  s.load_cell_N *= gains_.force_gain;
   s.tip_tilt_deg = std::atan(-weighted(tip_slope_weights_, displacement)) * 180 / std::numbers::pi;
   return s;
+}
+
+Eigen::VectorXd loadCellInfluence(const ReducedModel& model) {
+  const std::vector<int> cell = loadCellZDofs(model);
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(model.dofCount());
+  for (int dof : cell) load += model.K.col(dof);  // K_fc s on the free DOFs (solveStatic ignores the rest)
+  Eigen::VectorXd c = solveStatic(model, load).displacement;  // K_ff^-1 K_fc s, zero at fixed DOFs
+  for (int dof : cell) c(dof) = -1;
+  return c;
 }
 
 std::vector<int> matchKeypoints(const ReducedModel& model, const std::vector<double>& received_xyz, double tolerance_m) {

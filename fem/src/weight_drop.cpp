@@ -78,7 +78,7 @@ WeightDropResult simulateWeightDrop(const ReducedModel& model, const study::Tool
   ReducedModel loaded = model;
   addLumpedMass(loaded, pan_z_dofs, drop.mass_kg / n);
 
-  const Sensors sensors(loaded, tool.constraints.sensor_from_top_m);
+  const Sensors sensors(loaded, tool);
   WeightDropResult result;
   result.pan_keypoints = static_cast<int>(pan_z_dofs.size());
   const StaticSolution static_solution = solveStatic(loaded, load);

@@ -19,7 +19,8 @@ struct UnitSuffix {
 };
 
 // Longest suffixes first so that `_mm_s` wins over `_s` and `_mm2` over `_mm`.
-constexpr std::array<UnitSuffix, 12> kUnitSuffixes{{
+constexpr std::array<UnitSuffix, 13> kUnitSuffixes{{
+    {"_Nm_per_rad", "N m/rad", 1.0},
     {"_mm_s", "mm/s", 1e-3},
     {"_kg_m3", "kg/m^3", 1.0},
     {"_J_m3", "J/m^3", 1.0},

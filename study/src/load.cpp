@@ -336,9 +336,10 @@ class StudyParser {
 
     const bool deformable = kind == StudyKind::Coupled || kind == StudyKind::WeightDrop || kind == StudyKind::FemOnly;
     tool.fem.deformable = deformable;
-    if (deformable) {
+    if (deformable || kind == StudyKind::DemOnly) {
+      // A DEM-only tool is rigid, but its load cell reads the static split of its FEM model.
       ObjectReader f = t.object("fem", Need::Required);
-      readToolFem(f, tool.fem, geometry == GeometryKind::MatrixMarket);
+      readToolFem(f, tool.fem, geometry == GeometryKind::MatrixMarket, deformable);
     } else {
       t.forbid("fem", std::string("the tool of a ") + kindName(kind) + " study is rigid");
     }
@@ -350,10 +351,21 @@ class StudyParser {
       if (clamp) tool.constraints.clamp_length_m = *clamp;
       if (load_cell) tool.constraints.load_cell_from_top_m = *load_cell;
       if (sensor) tool.constraints.sensor_from_top_m = *sensor;
+      tool.constraints.clamp_rotational_stiffness_Nm_per_rad =
+          deformable ? c.quantity("clamp_rotational_stiffness_Nm_per_rad", leftOpen(0.0, 1e9), Need::Optional) : std::nullopt;
+      if (!deformable) c.forbid("clamp_rotational_stiffness_Nm_per_rad", "the tool is rigid (no FEM model to hold)");
       source.constraints_ok = clamp && load_cell && sensor && geometry_lengths_ok;
       c.finish();
     } else {
       t.forbid("constraints", "a penetrometer is rigid and has no clamp or sensors");
+    }
+    if (deformable) {
+      ObjectReader s = t.object("sensors", Need::Optional);
+      if (auto v = s.quantity("force_gain", leftOpen(0.0, 100.0), Need::Optional)) tool.sensors.force_gain = *v;
+      if (auto v = s.quantity("deformation_gain", leftOpen(0.0, 100.0), Need::Optional)) tool.sensors.deformation_gain = *v;
+      s.finish();
+    } else {
+      t.forbid("sensors", "sensor gains apply to the FEM tool's load cell and deformation sensor");
     }
     if (soil) {
       ObjectReader m = t.object("motion", Need::Required);
@@ -470,7 +482,7 @@ class StudyParser {
     return file;
   }
 
-  void readToolFem(ObjectReader& f, ToolFem& fem, bool matrices_given) {
+  void readToolFem(ObjectReader& f, ToolFem& fem, bool matrices_given, bool dynamic) {
     if (matrices_given) {
       const std::string why = "the mass and stiffness matrices of a \"matrix-market\" geometry already contain it";
       for (const char* key : {"E_Pa", "nu", "density_kg_m3", "element_order"}) f.forbid(key, why);
@@ -480,8 +492,13 @@ class StudyParser {
       if (auto v = f.quantity("density_kg_m3", closedInterval(kMinDensity, kMaxDensity), Need::Required)) fem.density_kg_m3 = *v;
       if (auto v = f.choice("element_order", detail::kElementOrders, Need::Optional)) fem.element_order = *v;
     }
-    if (auto v = f.quantity("alpha_s", closedInterval(0.0, 1.0), Need::Required)) fem.alpha_s = *v;  // Eq (4)
-    if (auto v = f.quantity("beta_per_s", closedInterval(0.0, 1e6), Need::Required)) fem.beta_per_s = *v;
+    if (!dynamic) {
+      const std::string why = "a rigid tool is not integrated in time (its FEM model gives the load cell's static split)";
+      for (const char* key : {"alpha_s", "beta_per_s"}) f.forbid(key, why);
+    } else {
+      if (auto v = f.quantity("alpha_s", closedInterval(0.0, 1.0), Need::Required)) fem.alpha_s = *v;  // Eq (4)
+      if (auto v = f.quantity("beta_per_s", closedInterval(0.0, 1e6), Need::Required)) fem.beta_per_s = *v;
+    }
     f.finish();
   }
 

@@ -120,7 +120,7 @@ ordered_json toolJson(const Tool& tool, StudyKind kind) {
       put(geometry, "keypoint_spacing_mm", g.keypoint_spacing_m);
       break;
   }
-  if (tool.fem.deformable) {
+  if (tool.fem.deformable || kind == StudyKind::DemOnly) {
     ordered_json& fem = out["fem"];
     if (g.kind != GeometryKind::MatrixMarket) {
       put(fem, "E_Pa", tool.fem.youngs_Pa);
@@ -128,14 +128,23 @@ ordered_json toolJson(const Tool& tool, StudyKind kind) {
       put(fem, "density_kg_m3", tool.fem.density_kg_m3);
       fem["element_order"] = nameOf(detail::kElementOrders, tool.fem.element_order);
     }
-    put(fem, "alpha_s", tool.fem.alpha_s);
-    put(fem, "beta_per_s", tool.fem.beta_per_s);
+    if (tool.fem.deformable) {
+      put(fem, "alpha_s", tool.fem.alpha_s);
+      put(fem, "beta_per_s", tool.fem.beta_per_s);
+    }
   }
   if (g.kind != GeometryKind::Cone) {
     ordered_json& c = out["constraints"];
     put(c, "clamp_length_mm", tool.constraints.clamp_length_m);
     put(c, "load_cell_from_top_mm", tool.constraints.load_cell_from_top_m);
     put(c, "sensor_from_top_mm", tool.constraints.sensor_from_top_m);
+    if (tool.constraints.clamp_rotational_stiffness_Nm_per_rad)
+      put(c, "clamp_rotational_stiffness_Nm_per_rad", *tool.constraints.clamp_rotational_stiffness_Nm_per_rad);
+  }
+  if (tool.fem.deformable) {
+    ordered_json& s = out["sensors"];
+    put(s, "force_gain", tool.sensors.force_gain);
+    put(s, "deformation_gain", tool.sensors.deformation_gain);
   }
   if (hasSoil(kind)) {
     ordered_json& m = out["motion"];

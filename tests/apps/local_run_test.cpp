@@ -51,7 +51,7 @@ bool dead(pid_t pid) {
 
 }  // namespace
 
-TEST_CASE("demfem run starts both processes over ipc and leaves complete outputs", "[apps]") {
+TEST_CASE("demfem run starts both processes over ipc and marks a run cut by --steps incomplete", "[apps]") {
   const fs::path dir = freshDir("local-run");
   const fs::path study = fastQuickStudy(dir);
   Process run({app("demfem"), "run", study.string(), "--backend", "harmonic", "--steps", "120", "--output",
@@ -59,10 +59,15 @@ TEST_CASE("demfem run starts both processes over ipc and leaves complete outputs
               dir / "demfem");
   const int status = run.wait(180s);
   INFO(run.err());
-  REQUIRE(exitedOk(status));
-  CHECK(nlohmann::json::parse(readText(dir / "out" / "sensors.json"))["complete"] == true);
+  REQUIRE(exitedOk(status));  // the user asked for 120 steps and got them
+  const auto sidecar = nlohmann::json::parse(readText(dir / "out" / "sensors.json"));
+  CHECK(sidecar["complete"] == false);
+  CHECK_THAT(sidecar["incomplete_reason"].get<std::string>(), Catch::StartsWith("stopped after 120 of "));
+  CHECK(readText(dir / "out" / "sensors.csv").find("\n# incomplete: stopped after 120 of ") != std::string::npos);
   const auto summary = nlohmann::json::parse(readText(dir / "summary.json"));
+  CHECK(summary["complete"] == false);
   CHECK(summary["steps"] == 120);
+  CHECK(summary["planned_steps"] == sidecar["planned_steps"]);
   CHECK(summary["backend"] == "harmonic");
   CHECK(csvRows(dir / "out" / "sensors.csv").size() == summary["drag_steps"].get<std::size_t>());
   CHECK_FALSE(fs::exists(dir / "out" / "sensors.csv.partial"));

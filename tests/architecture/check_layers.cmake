@@ -8,9 +8,11 @@ set(allowed_fem "fem;adapter;study")
 set(allowed_backends/builtin "backends/builtin;adapter;study")
 set(allowed_backends/liggghts "backends/liggghts;adapter;study")
 set(allowed_analysis "analysis")
+# campaign reruns the model: above fem, the backends and analysis (analysis stays simulation-free).
+set(allowed_campaign "campaign;analysis;fem;backends/builtin;adapter;study")
 
 set(violations "")
-foreach(layer study protocol adapter fem backends/builtin backends/liggghts analysis)
+foreach(layer study protocol adapter fem backends/builtin backends/liggghts analysis campaign)
   file(GLOB_RECURSE files ${SOURCE_DIR}/${layer}/*.hpp ${SOURCE_DIR}/${layer}/*.h ${SOURCE_DIR}/${layer}/*.cpp)
   foreach(f ${files})
     file(STRINGS ${f} includes REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"]demfem/")

@@ -1,7 +1,10 @@
 // The coupled driver against an in-process analytic backend (no processes, no sockets).
 #include "demfem/adapter/test_backends.hpp"
 #include "demfem/fem/coupled_driver.hpp"
+#include "demfem/fem/model.hpp"
+#include "demfem/fem/sensors.hpp"
 #include "demfem/study/study.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -84,4 +87,87 @@ TEST_CASE("coupled driver times insertion and drag from the DEM clock, which nee
   CHECK(drag.origin_m[1] == Approx(study.soil.fill_height_m - motion.depth_m).margin(1e-12));
   CHECK(drag.velocity_m_s[2] == Approx(motion.velocity_m_s).margin(1e-12));
   std::filesystem::remove_all(options.output_dir);
+}
+
+namespace {
+
+// Runs the driver on the constant test backend (10 N against travel on the tip row) for the
+// insertion and `drag_rows` drag steps; returns the sensors.csv load-cell column.
+std::vector<double> loadCellColumn(const study::Study& study, const std::filesystem::path& out, int drag_rows) {
+  auto dem = adapter::makeTestBackend("constant", study.tools, adapter::TestLoad{});
+  fem::CoupledRunOptions options;
+  options.output_dir = out;
+  options.max_steps = study::planToolMotion(study, study.tools[0]).insertion_steps + drag_rows;
+  fem::CoupledDriver(study, options).run(*dem);
+  std::ifstream in(out / "sensors.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<double> force;
+  while (std::getline(in, line))
+    if (line[0] != '#') force.push_back(std::stod(line.substr(line.find(',', line.find(',') + 1) + 1)));
+  return force;
+}
+
+}  // namespace
+
+TEST_CASE("a DEM-only (rigid) and a coupled run of the same tool read the same load cell for the same static forces", "[fem]") {
+  const study::Study coupled = smallQuickStudy();
+  auto doc = study::toJson(coupled);
+  doc["kind"] = "dem-only";
+  doc["tools"][0]["fem"].erase("alpha_s");
+  doc["tools"][0]["fem"].erase("beta_per_s");
+  const study::Study rigid = study::parseStudy(doc.dump(), "quick.json (small tool, dem-only)");
+  REQUIRE_FALSE(rigid.tools[0].fem.deformable);
+
+  const auto dir = std::filesystem::temp_directory_path() / "demfem-driver-rigid-test";
+  std::filesystem::remove_all(dir);
+  const auto deformable_N = loadCellColumn(coupled, dir / "coupled", 5);
+  const auto rigid_N = loadCellColumn(rigid, dir / "rigid", 5);
+  // The reference: the static FEM solution under the same forces (CalculiX-checked sensors).
+  const fem::ReducedModel model = fem::reduce(fem::buildFullModel(coupled.tools[0]));
+  const fem::StaticSolution s = fem::solveStatic(model, [&] {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(model.dofCount());
+    int tip = 0;
+    for (int k = 0; k < model.keypointCount(); ++k) tip += std::abs(model.keypoints(k, 1)) < 1e-12;
+    for (int k = 0; k < model.keypointCount(); ++k)
+      if (std::abs(model.keypoints(k, 1)) < 1e-12) f(3 * k + 2) = adapter::TestLoad{}.force_N / tip;
+    return f;
+  }());
+  const double expected_N = fem::Sensors(model, coupled.tools[0].constraints.sensor_from_top_m).read(s.displacement, s.reaction).load_cell_N;
+  REQUIRE(expected_N > 10);  // against travel, and more than the load itself (propped cantilever)
+  REQUIRE(rigid_N.size() == 5);
+  REQUIRE(deformable_N.size() == 5);
+  for (std::size_t i = 0; i < 5; ++i) {
+    // The coupled tool starts in static equilibrium and the load never changes: it stays there.
+    CHECK(deformable_N[i] == Approx(expected_N).epsilon(1e-9));
+    CHECK(rigid_N[i] == Approx(expected_N).epsilon(1e-9));
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a run cut short by max_steps is marked incomplete with the steps it did", "[fem]") {
+  const study::Study study = smallQuickStudy();
+  const auto out = std::filesystem::temp_directory_path() / "demfem-driver-truncated-test";
+  std::filesystem::remove_all(out);
+  auto dem = adapter::makeTestBackend("constant", study.tools, adapter::TestLoad{});
+  fem::CoupledRunOptions options;
+  options.output_dir = out;
+  const auto plan = study::planToolMotion(study, study.tools[0]);
+  options.max_steps = plan.insertion_steps + 7;
+  const auto summary = fem::CoupledDriver(study, options).run(*dem);
+  const std::string reason = "stopped after " + std::to_string(plan.insertion_steps + 7) + " of " +
+                             std::to_string(plan.totalSteps()) + " FEM steps";
+  CHECK_FALSE(summary.complete);
+  CHECK(summary.incomplete_reason == reason);
+  std::ifstream in(out / "sensors.json");
+  const auto sidecar = nlohmann::json::parse(in);
+  CHECK(sidecar["complete"] == false);
+  CHECK(sidecar["incomplete_reason"] == reason);
+  CHECK(sidecar["steps"] == plan.insertion_steps + 7);
+  CHECK(sidecar["planned_steps"] == plan.totalSteps());
+  std::ifstream csv(out / "sensors.csv");
+  std::stringstream text;
+  text << csv.rdbuf();
+  CHECK(text.str().find("\n# incomplete: " + reason + "\n") != std::string::npos);
+  std::filesystem::remove_all(out);
 }

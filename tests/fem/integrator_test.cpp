@@ -110,7 +110,7 @@ TEST_CASE("after a step load the response settles to the static solution with ba
   for (int k = 0; k < model.keypointCount(); ++k)
     if (model.keypoints(k, 1) <= 0.02 + 1e-12 && model.keypoints(k, 2) > 0) load(3 * k + 2) = -1.0 / loaded, load(3 * k + 1) = 0.2 / loaded;
   const StaticSolution static_solution = solveStatic(model, load);
-  const Sensors sensors(model, tool.constraints.sensor_from_top_m);
+  const Sensors sensors(model, tool);
 
   ThreeLevelIntegrator integrator(model, dt, damping);
   integrator.start(Eigen::VectorXd::Zero(model.dofCount()));

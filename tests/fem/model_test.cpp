@@ -79,7 +79,7 @@ TEST_CASE("sensors read deformation by row interpolation, tip tilt by slope and 
   study::Tool tool = testing::pmmaTool();
   tool.geometry.width_m = 0.010;  // narrow: a quick reduction, same rows along y as the PMMA tool
   const ReducedModel model = reduce(buildPlateModel(tool));
-  const Sensors sensors(model, tool.constraints.sensor_from_top_m);
+  const Sensors sensors(model, tool);
   // A linear field -u_z = a + b y: the sensor at y = 107 mm reads a + b 0.107 exactly; the tip
   // slope of -u_z is -b (deflection grows toward the tip for b < 0).
   const double a = 2e-3, b = -5e-3;

@@ -260,8 +260,9 @@ TEST_CASE("particle sizes are ordered", "[study]") {
 
 TEST_CASE("sections and keys follow the study kind and the chosen models", "[study]") {
   json doc = quick();
-  doc["kind"] = "dem-only";  // the rigid tool of a DEM-only study has no FEM data
-  requireSingleIssue(doc, "/tools/0/fem", "does not apply: the tool of a dem-only study is rigid");
+  doc["kind"] = "dem-only";  // the rigid tool of a DEM-only study is not integrated in time
+  doc["tools"][0]["fem"].erase("beta_per_s");
+  requireSingleIssue(doc, "/tools/0/fem/alpha_s", "does not apply: a rigid tool is not integrated in time");
   doc = quick();
   doc["kind"] = "weight-drop";
   const std::vector<Issue> drop = issuesOf(doc);
@@ -448,4 +449,28 @@ TEST_CASE("an ipc endpoint that names an existing file is refused: binding would
   doc["coupling"]["endpoint"] = "x";
   requireSingleIssue(doc, "/coupling/endpoint", "must start with");
   std::filesystem::remove(file);
+}
+
+TEST_CASE("the model extensions a diagnosis adds are study keys with ranges, absent = today's model", "[study]") {
+  const Study plain = parseStudy(paper("weight_drop_1kg.json").dump(), "weight_drop_1kg.json");
+  CHECK_FALSE(plain.tools[0].constraints.clamp_rotational_stiffness_Nm_per_rad);
+  CHECK(plain.tools[0].sensors.force_gain == 1.0);
+  CHECK(plain.tools[0].sensors.deformation_gain == 1.0);
+  json doc = paper("weight_drop_1kg.json");
+  doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 25.0;
+  doc["tools"][0]["sensors"] = {{"force_gain", 0.95}, {"deformation_gain", 1.1}};
+  doc["tools"][0]["fem"]["beta_per_s"] = 0.4;
+  const Study extended = parseStudy(doc.dump(), "extended.json");
+  CHECK(extended.tools[0].constraints.clamp_rotational_stiffness_Nm_per_rad == 25.0);
+  CHECK(extended.tools[0].sensors.force_gain == 0.95);
+  CHECK(extended.tools[0].sensors.deformation_gain == 1.1);
+  CHECK(parseStudy(toJson(extended).dump(), "extended.json") == extended);
+  doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 0;
+  requireSingleIssue(doc, "/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", "must be > 0 and <= 1e9, got 0");
+  doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 25.0;
+  doc["tools"][0]["sensors"]["force_gain"] = -1;
+  requireSingleIssue(doc, "/tools/0/sensors/force_gain", "must be > 0 and <= 100, got -1");
+  json rigid = paper("s235_dem_18.json");
+  rigid["tools"][0]["sensors"] = {{"force_gain", 0.95}};
+  requireSingleIssue(rigid, "/tools/0/sensors", "does not apply");
 }

@@ -22,6 +22,9 @@ int runApp(CLI::App& app, int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << prog << ": " << e.what() << '\n';
     return kBadInput;
+  } catch (const Interrupted& e) {
+    std::cerr << prog << ": " << e.what() << '\n';
+    return kInterrupted;
   } catch (const std::exception& e) {
     std::cerr << prog << ": error: " << e.what() << '\n';
     return kFailure;

@@ -1,13 +1,17 @@
 #include "demfem/backends/builtin/backend.hpp"
 
 #include "demfem/adapter/checkpoint_file.hpp"
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/plate_surface.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
+#include <sstream>
 
 namespace demfem::builtin {
 
@@ -17,7 +21,6 @@ using adapter::CouplingError;
 using adapter::ErrorCode;
 
 constexpr char kCheckpointKind[] = "builtin";
-constexpr double kInsertionClearance_m = 0.005;  // tool tip starts this far above the fill surface
 
 class BuiltinBackend final : public adapter::CouplingApi {
  public:
@@ -30,20 +33,15 @@ class BuiltinBackend final : public adapter::CouplingApi {
       mesh.material = sim_.materials().index(tool.dem_material);
       const int m = sim_.addMesh(std::move(mesh));
       meshes_[tool.name] = m;
-      // Centred across the bin, tip above the surface, front face (local z = +T/2) at start_z.
-      sim_.setMeshMotion(m,
-                         {study.soil.bin_width_m / 2, study.soil.fill_height_m + kInsertionClearance_m,
-                          tool.motion.start_z_m - tool.geometry.thickness_m / 2},
-                         {0, 0, 0}, 0);
+      // At rest at the plan's start pose (coupling_api.hpp, "After construction"); only the client moves it.
+      sim_.setMeshMotion(m, study::planToolMotion(study, tool).start_m, {0, 0, 0}, 0);
     }
     // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
-    double dt = studyTimeStep(sim_, study.dem);
-    if (study.fem.dt_s > 0) dt = study.fem.dt_s / std::ceil(study.fem.dt_s / dt - 1e-9);
-    sim_.setTimeStep(dt);
-    insertTools();
+    sim_.setTimeStep(study::demStepDividing(studyTimeStep(sim_, study.dem), study.fem.dt_s));
     if (study.output.vtk_every > 0) {
       vtk_interval_ = study.output.vtk_every * study.fem.dt_s;
       next_vtk_ = sim_.time();
+      openVtkSeries(std::nullopt);
     }
     last_positions_time_ = sim_.time();
   }
@@ -123,6 +121,8 @@ class BuiltinBackend final : public adapter::CouplingApi {
       }
     } catch (const BlowUp& e) {
       throw CouplingError(ErrorCode::SimulationFailed, e.what());
+    } catch (const adapter::OutputError& e) {
+      throw CouplingError(ErrorCode::Internal, std::string("builtin DEM VTK output: ") + e.what());
     }
     const double span = static_cast<double>(steps) * sim_.timeStep();
     for (const auto& [name, m] : meshes_) {
@@ -143,17 +143,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
 
   void checkpoint(const std::filesystem::path& file) override {
     alive();
-    adapter::PayloadWriter out;
-    sim_.saveState(out);
-    out.put(last_positions_time_);
-    out.put(next_vtk_);
-    out.put(static_cast<std::int64_t>(vtk_count_));
-    out.put(static_cast<std::uint64_t>(interval_mean_.size()));
-    for (const auto& [m, f] : interval_mean_) {
-      out.put(static_cast<std::int64_t>(m));
-      out.putVector(f);
-    }
-    adapter::writeCheckpointFile(file, kCheckpointKind, out.bytes());
+constexpr char kCheckpointKind[] = "builtin";
   }
 
   // The file is validated completely (container, then every array against this simulation) before
@@ -183,6 +173,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
     next_vtk_ = next_vtk;
     vtk_count_ = static_cast<long>(vtk_count);
     interval_mean_ = std::move(interval_mean);
+    if (vtk_interval_ > 0) openVtkSeries(sim_.time());
   }
 
   void shutdown() override { closed_ = true; }
@@ -199,40 +190,30 @@ class BuiltinBackend final : public adapter::CouplingApi {
     return it->second;
   }
 
-  // Vertical insertion of every tool to its depth, then the drag velocity from the current position.
-  void insertTools() {
-    double longest = 0;
-    for (const auto& tool : study_.tools) {
-      const double travel = kInsertionClearance_m + tool.motion.depth_m;
-      longest = std::max(longest, travel / tool.motion.insertion_velocity_m_s);
-    }
-    for (const auto& tool : study_.tools) {
-      const int m = meshes_.at(tool.name);
-      const auto& mesh = sim_.mesh(m);
-      const double travel = kInsertionClearance_m + tool.motion.depth_m;
-      sim_.setMeshMotion(m, mesh.origin, {0, -travel / longest, 0}, sim_.time());
-    }
-    try {
-      sim_.run(std::lround(longest / sim_.timeStep()));
-    } catch (const BlowUp& e) {
-      throw CouplingError(ErrorCode::SimulationFailed, std::string("during tool insertion: ") + e.what());
-    }
-    for (const auto& tool : study_.tools) {
-      const int m = meshes_.at(tool.name);
-      const auto& mesh = sim_.mesh(m);
-      const Vec3 now = mesh.offset(sim_.time());
-      sim_.setMeshMotion(m, {now[0], study_.soil.fill_height_m - tool.motion.depth_m, now[2]},
-                         {0, 0, tool.motion.velocity_m_s}, sim_.time());
-    }
+  std::filesystem::path vtkDirectory() const { return study_.output.directory / "vtk"; }
+
+  // One collection per series (particles, each tool), continued from `resume_time_s` after a restore.
+  void openVtkSeries(std::optional<double> resume_time_s) {
+    std::filesystem::create_directories(vtkDirectory());
+    vtk_series_.clear();
+    vtk_series_.emplace("particles", adapter::VtkSeries(vtkDirectory() / "particles.pvd", resume_time_s));
+    for (const auto& [name, m] : meshes_)
+      vtk_series_.emplace("dem-" + name, adapter::VtkSeries(vtkDirectory() / ("dem-" + name + ".pvd"), resume_time_s));
   }
 
+  // Particles and tools at the current time, named by the FEM step they begin (the FEM client's
+  // tool files of the same instant carry the same number and time).
   void writeVtk() {
-    const auto dir = study_.output.directory;
-    std::filesystem::create_directories(dir);
-    char index[16];
-    std::snprintf(index, sizeof(index), "%06ld", vtk_count_);
-    sim_.writeParticlesVtk(dir / (std::string("particles_") + index + ".vtk"));
-    for (const auto& [name, m] : meshes_) sim_.writeMeshVtk(m, dir / ("dem-" + name + "_" + index + ".vtk"));
+    char index[24];
+    std::snprintf(index, sizeof(index), "_%06lld.vtk", static_cast<long long>(std::llround(sim_.time() / study_.fem.dt_s)));
+    const std::string particles = std::string("particles") + index;
+    sim_.writeParticlesVtk(vtkDirectory() / particles);
+    vtk_series_.at("particles").add(sim_.time(), particles);
+    for (const auto& [name, m] : meshes_) {
+      const std::string file = "dem-" + name + index;
+      sim_.writeMeshVtk(m, vtkDirectory() / file);
+      vtk_series_.at("dem-" + name).add(sim_.time(), file);
+    }
     ++vtk_count_;
     next_vtk_ += vtk_interval_;
   }
@@ -244,6 +225,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
   double last_positions_time_ = 0;
   double vtk_interval_ = 0, next_vtk_ = 0;
   long vtk_count_ = 0;
+  std::map<std::string, adapter::VtkSeries> vtk_series_;
   bool closed_ = false;
 };
 

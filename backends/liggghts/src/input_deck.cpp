@@ -1,6 +1,7 @@
 #include "demfem/backends/liggghts/input_deck.hpp"
 
 #include "demfem/adapter/coupling_api.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -260,10 +261,7 @@ adapter::PlateSurface toolSurface(const study::Study& study, std::size_t tool_in
 }
 
 std::array<double, 3> toolStartOrigin(const study::Study& study, std::size_t tool_index) {
-  const auto& tool = study.tools.at(tool_index);
-  // Local frame: tip at y = 0, front face at z = +T/2 (adapter/plate_surface.hpp).
-  return {study.soil.bin_width_m / 2, study.soil.fill_height_m + study.soil.diameter_max_m,
-          tool.motion.start_z_m - tool.geometry.thickness_m / 2};
+  return study::planToolMotion(study, study.tools.at(tool_index)).start_m;
 }
 
 void writeToolStl(const adapter::PlateSurface& surface, const std::array<double, 3>& origin,
@@ -298,7 +296,7 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
 
   InputDeck deck;
   deck.atom_type_count = static_cast<int>(n_types);
-  deck.time_step_s = demTimeStep(study);
+  deck.time_step_s = study::demStepDividing(demTimeStep(study), study.fem.dt_s);  // one clock with the FEM
 
   const double w = soil.bin_width_m;
   const double r_max = soil.diameter_max_m / 2;

@@ -1,6 +1,7 @@
 // The builtin backend through the coupling API on a small deposited bin with a plate tool.
 #include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/adapter/plate_surface.hpp"
+#include "demfem/adapter/tool_drive.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 
@@ -43,6 +44,7 @@ study::Study smallStudy() {
   tool.motion.depth_m = 0.01;
   tool.motion.velocity_m_s = 0.036;
   tool.motion.start_z_m = 0.03;
+  tool.motion.center_x_m = 0.06;  // the bin's centre line
   tool.motion.insertion_velocity_m_s = 0.05;
   s.tools = {tool};
   s.fem.dt_s = 0.001;
@@ -88,16 +90,20 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     const auto xyz = api->nodePositions("tool");
     for (std::size_t k = 0; k < plate.nodes.size(); ++k)
       for (int c = 0; c < 3; ++c) CHECK(xyz[3 * k + c] == plate.nodes[k][c]);
-    // Inserted to depth: tip 10 mm below the fill surface, centred, moving in +z.
+    // At rest at the plan's start (coupling_api.hpp): tip one largest diameter above the fill
+    // surface, centred across the bin, front face (z = +T/2) at start_z; clock at 0.
     const auto motion = api->rigidMotion("tool");
-    CHECK(motion.origin_m[1] == Approx(st.soil.fill_height_m - 0.01).margin(1e-12));
-    CHECK(motion.velocity_m_s[2] == 0.036);
+    CHECK(motion.origin_m[0] == 0.06);
+    CHECK(motion.origin_m[1] == Approx(st.soil.fill_height_m + st.soil.diameter_max_m).margin(1e-15));
+    CHECK(motion.origin_m[2] == Approx(0.03 - 0.002).margin(1e-15));
+    CHECK(motion.velocity_m_s == std::array<double, 3>{0, 0, 0});
+    CHECK(api->time() == 0);
   }
 
   SECTION("interval mean is the impulse over the interval; the DEM step divides the FEM step") {
-    const double t0 = api->time();
-    for (int k = 0; k < 20; ++k) api->simulate(0.001);
-    CHECK(api->time() - t0 == Approx(0.02).epsilon(1e-9));  // the DEM step divides the FEM step
+    // Right after the insertion the tool touches the soil (a few hundred grains: later in the drag,
+    // contacts come and go).
+    adapter::insertAndStartDrag(*api, st, st.tools[0]);
     // Interval mean = average of the instantaneous forces of its DEM steps (same state, restored).
     const double dt = api->info().dem_time_step_s;
     const auto file = std::filesystem::temp_directory_path() / "demfem-builtin-backend-test" / "mean.bin";
@@ -115,9 +121,13 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     for (double f : sum) scale = std::max(scale, std::fabs(f));
     REQUIRE(scale > 0);
     for (std::size_t q = 0; q < sum.size(); ++q) CHECK(mean[q] == Approx(sum[q]).margin(1e-12 * scale));
+    const double t0 = api->time();
+    for (int k = 0; k < 20; ++k) api->simulate(0.001);
+    CHECK(api->time() - t0 == Approx(0.02).epsilon(1e-9));  // the DEM step divides the FEM step
   }
 
   SECTION("deformation keeps the run going; checkpoint and restore continue bit-identically") {
+    adapter::insertAndStartDrag(*api, st, st.tools[0]);
     auto xyz = api->nodePositions("tool");
     for (std::size_t k = 0; k < xyz.size() / 3; ++k) xyz[3 * k + 2] += 1e-4 * (0.1 - xyz[3 * k + 1]) / 0.1;  // tip bent back
     api->setNodePositions("tool", xyz);
@@ -211,6 +221,7 @@ struct Draught {
 
 Draught dragTool(const study::Study& st, double drag_m) {
   auto api = builtin::makeBackend(st);
+  adapter::insertAndStartDrag(*api, st, st.tools[0]);
   const double interval = 0.01;
   const int intervals = static_cast<int>(std::lround(drag_m / st.tools[0].motion.velocity_m_s / interval));
   std::vector<double> fz;

@@ -3,7 +3,7 @@
 // writes, from rank 0, a JSON object with the mean draught force and the bookkeeping checks.
 // Usage: test_liggghts_mpi_drag_driver SEED OUT.json
 #include "demfem/backends/liggghts/backend.hpp"
-#include "demfem/backends/liggghts/tool_drive.hpp"
+#include "demfem/adapter/tool_drive.hpp"
 #include "small_study.hpp"
 
 #include <nlohmann/json.hpp>
@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
     }
     auto backend = liggghts::makeBackend(study);
     study.tools[0].motion.velocity_m_s = 0.3;
-    liggghts::insertAndStartDrag(*backend, study, study.tools[0]);
+    adapter::insertAndStartDrag(*backend, study, study.tools[0]);
     double draught = 0, worst_split_error = 0;
     const int intervals = 10;
     for (int i = 0; i < intervals; ++i) {

@@ -39,6 +39,7 @@ inline study::Study smallStudy() {
   tool.geometry.keypoint_spacing_m = 0.01;
   tool.motion.depth_m = 0.02;
   tool.motion.start_z_m = 0.0;
+  tool.motion.center_x_m = 0.04;  // the bin's centre line
   tool.motion.velocity_m_s = 0.1;
   tool.motion.stroke_m = 0.1;
   s.tools = {tool};

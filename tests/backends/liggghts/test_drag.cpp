@@ -1,6 +1,6 @@
 // The tool dragged through a deposited soil: draught force and keypoint force bookkeeping.
 #include "demfem/backends/liggghts/backend.hpp"
-#include "demfem/backends/liggghts/tool_drive.hpp"
+#include "demfem/adapter/tool_drive.hpp"
 #include "small_study.hpp"
 
 #include <catch2/catch.hpp>
@@ -15,7 +15,7 @@ TEST_CASE("a tool dragged through deposited soil feels a draught force its keypo
   auto backend = liggghts::makeBackend(study);
   REQUIRE(backend->time() == 0.0);
   const auto start = backend->nodePositions("tool");
-  liggghts::insertAndStartDrag(*backend, study, study.tools[0]);
+  adapter::insertAndStartDrag(*backend, study, study.tools[0]);
   const double drag_start = backend->time();
   const auto motion = backend->rigidMotion("tool");
   const double interval = 0.01;

@@ -1,7 +1,7 @@
 // The settled-soil cache: the first construction deposits and saves the soil, the next one reads it
 // and the two simulations are the same.
 #include "demfem/backends/liggghts/backend.hpp"
-#include "demfem/backends/liggghts/tool_drive.hpp"
+#include "demfem/adapter/tool_drive.hpp"
 #include "small_study.hpp"
 
 #include <catch2/catch.hpp>
@@ -26,7 +26,7 @@ Snapshot constructAndDrag(const study::Study& study, const liggghts::BackendOpti
   CHECK(origin.file.parent_path() == options.soil_directory);
   CHECK(fs::exists(origin.file));
   Snapshot s{liggghts::particles(*backend), {}};
-  liggghts::insertAndStartDrag(*backend, study, study.tools[0]);
+  adapter::insertAndStartDrag(*backend, study, study.tools[0]);
   backend->simulate(0.02);
   s.drag_forces = backend->nodeForces("tool", adapter::ForceMode::IntervalMean);
   return s;

@@ -11,9 +11,9 @@
 //   offset 48  payload; the file ends exactly after it
 //
 // Contract
-// - writeCheckpointFile() writes FILE.part, checks every write and the close, then renames it to
-//   FILE: a reader sees the old file or the complete new one. Throws CouplingError(Internal) naming
-//   the file and the failing step; FILE.part is removed on failure.
+// - writeCheckpointFile() writes FILE atomically (output_files.hpp: every write, sync and the
+//   rename checked): a reader sees the old file or the complete new one. Throws
+//   CouplingError(Internal) naming the file and the system's reason.
 // - readCheckpointFile() returns the payload only if the magic, version, kind, size and checksum all
 //   hold; otherwise it throws CouplingError(BadRequest) naming the file and the first check that
 //   failed. It reads at most the header plus the stated size (bounded) and never changes anything.

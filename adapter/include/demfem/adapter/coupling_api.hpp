@@ -22,9 +22,16 @@
 //   BadRequest and changes nothing). simulate(0) is allowed and changes
 //   nothing but lets a client refresh derived data. setNodePositions() takes effect before the next
 //   DEM step, with normals and neighbour data updated and contact history kept.
+// - After construction: time() == 0 and every tool of the study rests, undeformed, at the start pose
+//   of its motion plan (study/tool_motion.hpp): rigidMotion(tool) == {planToolMotion(study, tool)
+//   .start_m, velocity 0, t0 0}. A backend never moves a tool by itself: the tool moves only by the
+//   RigidMotion and node positions its client sets (rigidMotionOf() turns a plan phase into the
+//   former). The analytic test backends, built from tools without soil, rest them at the bin origin.
 // - Errors: every call throws CouplingError (with a code) on bad arguments (unknown geometry, wrong
 //   array size, NaN) or a failed simulation; the object stays usable for shutdown()/checkpoint.
 #pragma once
+
+#include "demfem/study/tool_motion.hpp"
 
 #include <array>
 #include <cstdint>
@@ -80,6 +87,11 @@ struct RigidMotion {
   std::array<double, 3> velocity_m_s{0, 0, 0};
   double t0_s = 0;
 };
+
+// The rigid motion of a plan phase on a DEM clock that read `plan_start_s` at plan time 0.
+inline RigidMotion rigidMotionOf(const study::LinearMotion& phase, double plan_start_s) {
+  return {phase.origin_m, phase.velocity_m_s, plan_start_s + phase.t0_s};
+}
 
 using NodeArray = std::vector<double>;  // n x 3, row-major
 

@@ -1,27 +1,27 @@
 // demfem analysis: the calibration-weight response (paper Section 2.10.1 / 3.1, Figs. 7 and 8):
-// steady value, frequency and damping ratio from several cycles, and the correlation of two
-// responses after aligning their first local maxima.
+// steady value, frequency and damping ratio of a whole record, their cycle-by-cycle spread, and the
+// correlation of two responses after aligning their first local maxima.
 //
 // analyseStepResponse(t, y):
-//  - steady value y_ss = mean of the last `steady_fraction` of the samples (at least
-//    `min_tail_samples`); its spread is the standard deviation of those samples.
-//  - e = y - y_ss, sign-flipped when the response falls (y_ss < y[0]) so overshoots are positive.
-//  - Cycles are counted with a hysteresis band +-h, h = max(noise_band_factor * tail std,
-//    min_amplitude_fraction * largest overshoot): an upward zero crossing counts once e has been
-//    below -h and then rises above +h; its time is interpolated linearly where e = 0. Between an
-//    upward crossing and the next fall below -h the maximum of e is a peak (time and value refined
-//    by a parabola through the three samples around it).
-//  - Frequency per cycle f_k = 1 / (u_{k+1} - u_k) from consecutive upward crossings (the damped
-//    frequency); damping ratio per cycle from the logarithmic decrement of consecutive peaks:
-//    delta_k = ln(a_k / a_{k+1}), zeta_k = delta_k / sqrt(4 pi^2 + delta_k^2).
-//  - Reported: mean and sample standard deviation over the cycles (Fig. 8 shows them as bars with
-//    error segments). Fewer than `min_cycles` periods or decrements throws InputError naming
-//    `what` (file and column).
+//  - Steady value, frequency and damping ratio: the damped step response fitted to every sample
+//    (step_fit.hpp). The first local maximum (first overshoot) is the fitted curve's, t0 + pi / w_d.
+//  - Cycle by cycle (the spread Fig. 8 draws as error segments): e = y - y_ss of the fit, sign-
+//    flipped when the response falls so overshoots are positive, counted with a hysteresis band +-h,
+//    h = max(noise_band_factor * the fit's residual rms, min_amplitude_fraction * largest overshoot):
+//    an upward zero crossing counts once e has been below -h and then rises above +h; its time is
+//    interpolated linearly where e = 0. Between an upward crossing and the next fall below -h the
+//    maximum of e is a peak (time and value refined by a parabola through the three samples around
+//    it). f_k = 1 / (u_{k+1} - u_k) from consecutive upward crossings; zeta_k from the logarithmic
+//    decrement of consecutive peaks, delta_k = ln(a_k / a_{k+1}), zeta_k = delta_k / sqrt(4 pi^2 +
+//    delta_k^2). Their sample standard deviations are the spread (NaN below two estimates).
+//  - Throws InputError naming `what` (file and column) when the fit does (too few samples, no step,
+//    no overshoot).
 //
 // Units: time s, value in the signal's unit (N or mm), frequency Hz, damping ratio 1.
 #pragma once
 
 #include "demfem/analysis/recording.hpp"
+#include "demfem/analysis/step_fit.hpp"
 
 #include <string>
 #include <vector>
@@ -29,23 +29,18 @@
 namespace demfem::analysis {
 
 struct StepResponseSettings {
-  double steady_fraction = 0.2;
-  std::size_t min_tail_samples = 10;
   double noise_band_factor = 3.0;
   double min_amplitude_fraction = 0.02;
-  std::size_t min_cycles = 2;
 };
 
 struct StepResponse {
-  double steady_value = 0.0;
-  double steady_std = 0.0;
-  double frequency_mean_Hz = 0.0;
-  double frequency_std_Hz = 0.0;
-  double damping_ratio_mean = 0.0;
-  double damping_ratio_std = 0.0;
+  StepResponseFit fit;  // steady value, frequency, damping ratio of the whole record
+  double first_peak_time_s = 0.0;  // the fitted curve's first local maximum
+  // Cycle by cycle (Fig. 8's spread).
   std::vector<double> cycle_frequencies_Hz;  // one per period
   std::vector<double> cycle_damping_ratios;  // one per pair of consecutive peaks
-  double first_peak_time_s = 0.0;  // the first local maximum (of e, i.e. the first overshoot)
+  double cycle_frequency_std_Hz = 0.0;       // NaN below two periods
+  double cycle_damping_ratio_std = 0.0;      // NaN below two decrements
   std::vector<double> peak_times_s;
   std::vector<double> peak_values;  // y at the peaks (signal unit)
   std::vector<double> upward_crossing_times_s;

@@ -1,5 +1,5 @@
-// demfem analysis: the `demfem evaluate` and `demfem compare` workflows (issue 7), as library
-// calls the thin executables run.
+// demfem analysis: the `demfem evaluate` and `demfem compare` workflows, as library calls the thin
+// executables run.
 //
 // Grouping: every recording's sidecar names its case (tool + depth_mm, or tool + mass_kg) and
 // repeat; recordings of one case are pooled. compare() matches measured and simulated cases by
@@ -7,8 +7,8 @@
 //
 // evaluate(): soil-bin runs -> Section 2.3 (evaluation.hpp), pooled per case; calibration-weight
 // runs -> calibration factors applied, steady value / frequency / damping of force and
-// deformation (step_response.hpp), pooled per case (cycle estimates of all repeats together;
-// steady value: mean and spread between repeats).
+// deformation fitted to each whole record (step_response.hpp), pooled per case (mean of the
+// repeats' fitted values; spread: cycle by cycle over all repeats, steady value between repeats).
 //
 // compare(): both sides evaluated as above, then per soil-bin case the percent difference of the
 // pooled means 100 (sim - meas) / meas (Fig. 15), FFT amplitude spectra of the window segment of
@@ -62,9 +62,11 @@ struct CalibrationRun {
 
 // Pooled step-response figures of one signal over the repeats of a case.
 struct ResponseSummary {
-  SignalStatistics steady;         // over the repeats' steady values
-  SignalStatistics frequency_Hz;   // over all cycles of all repeats
-  SignalStatistics damping_ratio;  // over all decrements of all repeats
+  SignalStatistics steady;  // over the repeats' fitted steady values (std: between repeats)
+  // mean: of the repeats' fitted values; std_dev and samples: over all cycles (decrements) of all
+  // repeats, the spread Fig. 8 draws (NaN below two).
+  SignalStatistics frequency_Hz;
+  SignalStatistics damping_ratio;
 };
 
 struct CalibrationCase {

@@ -28,7 +28,7 @@
 //     loop: f = dem.nodeForces(...)            // applied forces for the new time level
 //           u = integ.step(f);                 // Eq (9): displacements at t + dt; Eq (10) reactions
 //           dem.setNodePositions(keypoints + u); dem.simulate(dt);
-//           sensors.read(u, integ.reactions());  // Sensors sensors(model, sensor_from_top)
+//           sensors.read(u, integ.reactions());  // Sensors sensors(model, tool)
 //   state()/setState() save and restore everything step() depends on (checkpoint/restart).
 #pragma once
 

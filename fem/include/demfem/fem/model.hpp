@@ -17,6 +17,14 @@
 //   the neighbouring free region and is tiny; CalculiX decks written for comparison fix exactly the
 //   same nodes. The clamp's lower edge and the load-cell line must each lie on a keypoint row,
 //   otherwise the model is rejected (message names the nearest keypoint rows).
+// - A compliant clamp (tool.constraints.clamp_rotational_stiffness_Nm_per_rad = k_theta): the
+//   keypoints of the clamp's lower edge row are pinned (x and z fixed) and each of them with
+//   z != z_mid (the mid-plane) gets a ground spring along y of k_theta / sum_j (z_j - z_mid)^2, so
+//   that a rotation theta of the edge section about x is resisted by the moment k_theta theta; the
+//   keypoints above the edge (inside the clamp) are left free (they carry no load). As k_theta grows
+//   this tends to the rigid clamp. The springs are part of the stiffness: FullModel::K and
+//   ReducedModel::K include them, and Constraints::springs lists them (so that a caller scaling the
+//   material stiffness, e.g. for a new E, can keep the springs unscaled).
 // - The load cell (Section 2.9) fixes z of the keypoints on the line y = L - load_cell_from_top on
 //   the back face (z = -T/2, the face opposite to the soil-engaging front face z = +T/2).
 // - Reduction: T = [I; -K_bb^-1 K_ba], K_r = T^T K T = K_aa - K_ab K_bb^-1 K_ba (Eq 15), M_r = T^T M T
@@ -33,6 +41,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace demfem::fem {
@@ -62,6 +71,8 @@ Assembled assemble(const Mesh& mesh, const Material& material, HexIntegration in
 struct Constraints {
   std::vector<int> fixed_dofs;      // every constrained DOF (clamp and load cell), sorted, unique
   std::vector<int> load_cell_dofs;  // the load cell's DOFs (subset of fixed_dofs), sorted
+  // Ground springs (DOF, N/m) already contained in the model's K: the compliant clamp (contract).
+  std::vector<std::pair<int, double>> springs;
 };
 
 // The full model: M, K over all nodes, the keypoints and the constraints.
@@ -114,8 +125,9 @@ FullModel readMatrixMarketModel(const std::filesystem::path& mass_file,
                                 const study::ToolConstraints& constraints);
 
 // Section 2.9 constraints applied to the keypoints of `model` geometrically (see contract): fills
-// model.constraints. Throws std::invalid_argument if the clamp edge or load-cell line is not on a
-// keypoint row.
+// model.constraints and adds the clamp springs, if any, to model.K (pre: model.K holds no springs
+// yet). Throws std::invalid_argument if the clamp edge or load-cell line is not on a keypoint row or
+// the clamp edge row has no keypoint off the mid-plane.
 void applyToolConstraints(FullModel& model, const study::ToolConstraints& constraints);
 
 // Eq (11)-(15): reduces `model` to its keypoints. Throws std::invalid_argument if a constrained DOF

@@ -13,12 +13,16 @@
 //   * deformation_mm: the deflection against travel, -u_z, at the sensor line
 //     y = L - sensor_from_top, averaged over the keypoints of a row and interpolated linearly
 //     between the two nearest keypoint rows (the 93 mm line is between rows of a 5 mm grid).
+//   * Channel gains (tool.sensors): load_cell_N and deformation_mm are the true values times
+//     force_gain and deformation_gain (1 = ideal sensors); tip_tilt_deg is not a measured channel
+//     and has no gain.
 //   * tip_tilt_deg: the bending slope at the tip, atan of the difference of the row-mean -u_z of the
 //     lowest and second-lowest keypoint rows over their distance; positive when the tip is bent
 //     backwards (against travel).
 #pragma once
 
 #include "demfem/fem/model.hpp"
+#include "demfem/study/study.hpp"
 
 #include <Eigen/Core>
 
@@ -32,18 +36,27 @@ struct SensorReadings {
   double tip_tilt_deg = 0;
 };
 
-// Precomputed rows and weights of the sensors of one model. Throws std::invalid_argument if the
-// sensor line lies outside the keypoints' y range or the model has no load-cell DOF.
+// Precomputed rows and weights of the sensors of one model of `tool` (sensor line from
+// tool.constraints, gains from tool.sensors). Throws std::invalid_argument if the sensor line lies
+// outside the keypoints' y range or the model has no load-cell DOF.
 class Sensors {
  public:
-  Sensors(const ReducedModel& model, double sensor_from_top_m);
+  Sensors(const ReducedModel& model, const study::Tool& tool);
   SensorReadings read(const Eigen::VectorXd& displacement, const Eigen::VectorXd& reactions) const;
 
  private:
   std::vector<int> load_cell_z_dofs_;
   std::vector<std::pair<int, double>> sensor_z_weights_;  // (z DOF, weight), weights sum to 1
   std::vector<std::pair<int, double>> tip_slope_weights_; // (z DOF, weight): slope of -u_z, 1/m
+  study::ToolSensors gains_;
 };
+
+// The load cell's static influence coefficients (paper Section 2.9): c with load_cell_N = c . f
+// (Sensors::read of solveStatic(model, f)) for any keypoint forces f (3n, N, model DOF order). By
+// K u = f + r: r_c = K_cf K_ff^-1 f_f - f_c at the fixed DOFs, so one static solve gives them all:
+// c_f = K_ff^-1 K_fc s (s the indicator of the load-cell z DOFs) and c_c = -s. Used for a rigid
+// tool, whose load cell reads the same split of the soil forces as the deformable one at rest.
+Eigen::VectorXd loadCellInfluence(const ReducedModel& model);
 
 // Matches keypoint positions received from a DEM backend (n x 3, row-major, tool local frame, m) to
 // the model's keypoints: result[i] is the model keypoint id of received node i. Positions match if

@@ -152,7 +152,18 @@ struct ToolConstraints {
   double clamp_length_m = 0.040;       // all DOF fixed for y >= L - clamp_length
   double load_cell_from_top_m = 0.065; // z fixed on this line
   double sensor_from_top_m = 0.093;    // deformation sensor point
+  // A compliant clamp: a rotational spring (N m/rad, for the whole width) about the x axis at the
+  // clamp's lower edge instead of the rigid clamp. Absent = rigid clamp (docs/fem.md).
+  std::optional<double> clamp_rotational_stiffness_Nm_per_rad;
   bool operator==(const ToolConstraints&) const = default;
+};
+
+// Gains of the two measured channels (reading = gain x true value): 1 = ideal sensors. They model a
+// calibration-factor error of the load cell or the deformation sensor (docs/fem.md, Sensors).
+struct ToolSensors {
+  double force_gain = 1.0;
+  double deformation_gain = 1.0;
+  bool operator==(const ToolSensors&) const = default;
 };
 
 // Rigid motion in the bin frame: inserted vertically to `depth`, then dragged in +z.
@@ -174,6 +185,7 @@ struct Tool {
   ToolGeometry geometry;
   ToolFem fem;
   ToolConstraints constraints;
+  ToolSensors sensors;             // deformable tools only
   ToolMotion motion;
   bool operator==(const Tool&) const = default;
 };

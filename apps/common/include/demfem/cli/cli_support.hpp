@@ -24,6 +24,12 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Thrown when a stop request (Ctrl-C, SIGTERM) ended a command early: exit code 130.
+class Interrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // Parses argv into `app` and runs the selected callbacks, turning every exception into one message
 // on stderr (prefixed with the program name) and an exit code. Never lets an exception escape.
 int runApp(CLI::App& app, int argc, char** argv);

@@ -138,9 +138,10 @@ class DemSimulation {
   DemSimulation withState(adapter::PayloadReader& in) const;
   void loadState(adapter::PayloadReader& in);
 
-  // Legacy VTK polydata of the particles (radius, layer, velocity) for ParaView.
+  // Legacy VTK polydata of the particles (radius, layer, velocity) for ParaView. Written atomically;
+  // throws adapter::OutputError (adapter/output_files.hpp) naming the file.
   void writeParticlesVtk(const std::filesystem::path& file) const;
-  // Legacy VTK polydata of mesh m in the bin frame (with node force).
+  // Legacy VTK polydata of mesh m in the bin frame (with node force; positions to 17 digits). Same.
   void writeMeshVtk(int m, const std::filesystem::path& file) const;
 
  private:

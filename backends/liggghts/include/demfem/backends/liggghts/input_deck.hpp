@@ -43,7 +43,7 @@ struct InputDeck {
   std::vector<std::string> tool_clearance;  // after settling: remove particles in the tools' way
   std::vector<std::string> tools;           // tool meshes, their wall and movers
   int atom_type_count = 0;
-  double time_step_s = 0;
+  double time_step_s = 0;               // demTimeStep() shortened to divide fem.dt_s (study/tool_motion.hpp)
   double insertion_top_m = 0;           // top of the insertion stack (y)
 };
 
@@ -64,9 +64,9 @@ double hookeNormalStiffness(double youngs_i_Pa, double poisson_i, double youngs_
 // material that is not used by the study's layers, bin or tools.
 int atomType(const study::Study& study, const std::string& material);
 
-// Bin position of tool i's local origin at the start (after deposition): centred across the bin,
-// tip one largest particle diameter above the settled surface (soil.fill_height_m), front face at
-// motion.start_z_m. The client inserts the tool to its depth (setRigidMotion), as the FEM client does.
+// Bin position of tool i's local origin at the start (after deposition): the start pose of its motion
+// plan (study/tool_motion.hpp: x = motion.center_x_m, tip one largest particle diameter above the
+// settled surface, front face at motion.start_z_m). Only the client moves it (setRigidMotion).
 std::array<double, 3> toolStartOrigin(const study::Study& study, std::size_t tool_index);
 
 // The keypoint surface of tool i (plate tools only; other geometry kinds throw Unsupported).

@@ -1,0 +1,123 @@
+#include "demfem/campaign/objective.hpp"
+
+#include "demfem/analysis/step_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace demfem::campaign {
+namespace {
+
+// One repeat's value of a quantity and its own uncertainty.
+struct Estimate {
+  double value = 0;
+  double error = 0;  // weight fits: standard error; windows: the sample-based error of this repeat
+};
+
+using CaseEstimates = std::map<std::string, std::vector<Estimate>>;
+
+// Mean over repeats and the scatter of that mean (header comment).
+Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::vector<Estimate>& repeats, double floor) {
+  const auto R = static_cast<double>(repeats.size());
+  double mean = 0, own = 0;
+  for (const auto& e : repeats) mean += e.value / R, own += e.error * e.error / R;
+  double between = 0;
+  if (repeats.size() > 1) {
+    for (const auto& e : repeats) between += (e.value - mean) * (e.value - mean) / (R - 1);
+  }
+  const double sigma = std::sqrt(std::max(between, own) / R);
+  return {key, name, mean, std::max(sigma, floor * std::abs(mean))};
+}
+
+void addWeightRun(const analysis::Recording& rec, CaseEstimates& out) {
+  const WeightSignals s = weightSignals(rec);
+  const std::string file = rec.csv_path.string();
+  const auto f = analysis::fitStepResponse(s.time_s, s.force_N, file + ": force");
+  const auto d = analysis::fitStepResponse(s.time_s, s.deformation_mm, file + ": deformation");
+  out["step_force_N"].push_back({f.steady - f.initial, f.steady_error});
+  out["step_deformation_mm"].push_back({d.steady - d.initial, d.steady_error});
+  out["frequency_Hz"].push_back({d.frequency_Hz, d.frequency_error_Hz});
+  out["damping_ratio"].push_back({d.damping_ratio, d.damping_ratio_error});
+}
+
+void addSoilRun(const analysis::Recording& rec, const ObjectiveSettings& s, CaseEstimates& out) {
+  const analysis::EvaluatedRun run = analysis::evaluateSoilBinRun(rec, s.analysis.evaluation);
+  const auto add = [&](const std::string& name, const analysis::SignalStatistics& w) {
+    const double n = static_cast<double>(std::max<std::size_t>(w.samples, 2));
+    out["window_mean_" + name].push_back({w.mean, w.std_dev / std::sqrt(n)});
+    out["window_std_" + name].push_back({w.std_dev, w.std_dev / std::sqrt(2 * (n - 1))});
+  };
+  add("force_N", run.window.force_N);
+  if (s.soil_deformation) add("deformation_mm", run.window.deformation_mm);
+}
+
+// The order quantities are listed in (stable across measured and simulated sides).
+const std::vector<std::string>& quantityOrder() {
+  static const std::vector<std::string> order = {"step_force_N",         "step_deformation_mm",        "frequency_Hz",
+                                                 "damping_ratio",        "window_mean_force_N",        "window_std_force_N",
+                                                 "window_mean_deformation_mm", "window_std_deformation_mm"};
+  return order;
+}
+
+}  // namespace
+
+WeightSignals weightSignals(const analysis::Recording& rec) {
+  const bool raw = rec.format == analysis::RecordingFormat::Raw;
+  WeightSignals s;
+  s.time_s = rec.time_s;
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    s.force_N.push_back(rec.force[i] * (raw ? rec.force_factor_N_per_unit : 1.0));
+    s.deformation_mm.push_back(rec.deformation[i] * (raw ? rec.deformation_factor_mm_per_unit : 1.0));
+  }
+  return s;
+}
+
+std::vector<Quantity> quantities(const std::vector<analysis::Recording>& recordings, const ObjectiveSettings& settings, bool tolerate_failures) {
+  std::map<analysis::CaseKey, CaseEstimates> cases;
+  for (const auto& rec : recordings) {
+    CaseEstimates one;
+    try {
+      switch (rec.key.kind) {
+        case analysis::CaseKind::CalibrationWeight:
+          addWeightRun(rec, one);
+          break;
+        case analysis::CaseKind::SoilBin:
+          addSoilRun(rec, settings, one);
+          break;
+      }
+    } catch (const analysis::InputError&) {
+      if (!tolerate_failures) throw;
+      continue;
+    }
+    for (auto& [name, estimates] : one) cases[rec.key][name].push_back(estimates.front());
+  }
+  std::vector<Quantity> out;
+  for (const auto& [key, estimates] : cases)
+    for (const auto& name : quantityOrder())
+      if (auto it = estimates.find(name); it != estimates.end()) out.push_back(pool(key, name, it->second, settings.relative_floor));
+  return out;
+}
+
+std::vector<Residual> residuals(const std::vector<Quantity>& measured, const std::vector<Quantity>& simulated) {
+  std::vector<Residual> out;
+  for (const Quantity& m : measured) {
+    const auto it = std::find_if(simulated.begin(), simulated.end(), [&](const Quantity& s) { return s.key == m.key && s.name == m.name; });
+    const double sim = it == simulated.end() ? 0.0 : it->value;
+    out.push_back({m.key, m.name, m.value, sim, m.sigma, (sim - m.value) / m.sigma});
+  }
+  return out;
+}
+
+double chi2(const std::vector<Residual>& residuals) {
+  double sum = 0;
+  for (const auto& r : residuals) sum += r.normalized * r.normalized;
+  return sum;
+}
+
+nlohmann::json toJson(const Residual& r) {
+  return {{"case", r.key.label()}, {"quantity", r.quantity}, {"measured", r.measured}, {"simulated", r.simulated},
+          {"sigma", r.sigma},      {"normalized", r.normalized}};
+}
+
+}  // namespace demfem::campaign

@@ -1,0 +1,146 @@
+// Test fixture: calibration-weight recordings from a model INDEPENDENT of the project's FEM code: an
+// Euler-Bernoulli beam of the tool's free part (Hermite cubic elements, consistent mass, its own
+// eigen solution and an exact modal step response), with the effects a diagnosis must find built
+// in: a rotational spring at the clamp edge, Rayleigh damping C = alpha K + beta M, and gains on the
+// two channels. Written as a raw DAQ recording: t, force, deformation in DAQ units, quantised to
+// whole units, Gaussian noise, a resting baseline before the weight is hung.
+//
+// Beam: x from the clamp's lower edge (x = 0) to the tip (x = free_length). w(0) = 0; the root
+// rotation is fixed (rigid clamp) or held by the spring k_theta; the load cell holds w(prop) = 0 and
+// reads the support force. The pan: the weight m g in equal parts on the nodes within pan_length of
+// the tip, its mass lumped there. Deformation: w at the sensor, interpolated with the element's
+// shape functions. The tool's own weight is tared, so the readings are the response to the weight.
+#pragma once
+
+#include "demfem/analysis/synthetic.hpp"
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <optional>
+#include <random>
+#include <vector>
+
+namespace demfem::campaign::test {
+
+struct BeamTool {
+  double E_Pa = 4.06e9, density_kg_m3 = 1220, width_m = 0.010, thickness_m = 0.004;
+  double free_length_m = 0.160;      // tip to clamp edge
+  double prop_from_edge_m = 0.025;   // load cell
+  double sensor_from_edge_m = 0.053; // deformation sensor
+  double pan_length_m = 0.010;       // nodes within this distance of the tip carry the weight
+  double element_m = 0.005;
+  double alpha_s = 0.00055, beta_per_s = 0.0;
+  std::optional<double> k_theta_Nm_per_rad;  // none: rigid clamp
+  double force_gain = 1.0, deformation_gain = 1.0;
+};
+
+struct Daq {
+  double sample_rate_Hz = 1000, duration_s = 3.0, drop_time_s = 0.2;
+  double force_factor_N_per_unit = 0.002, deformation_factor_mm_per_unit = 0.0002;
+  double force_noise_N = 0.002, deformation_noise_mm = 0.0002;
+  std::uint64_t seed = 1;
+};
+
+struct BeamResponse {
+  std::vector<double> t_s, force_N, deformation_mm;  // true channels (gains applied), no noise
+};
+
+inline BeamResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std::vector<double>& t_after_drop) {
+  const int elements = static_cast<int>(std::lround(b.free_length_m / b.element_m));
+  const double h = b.free_length_m / elements;
+  const int nodes = elements + 1, n = 2 * nodes;  // DOFs (w, theta) per node, node 0 at the clamp edge
+  const double EI = b.E_Pa * b.width_m * std::pow(b.thickness_m, 3) / 12;
+  const double rhoA = b.density_kg_m3 * b.width_m * b.thickness_m;
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n), M = Eigen::MatrixXd::Zero(n, n);
+  Eigen::Matrix4d ke, me;
+  ke << 12, 6 * h, -12, 6 * h, 6 * h, 4 * h * h, -6 * h, 2 * h * h, -12, -6 * h, 12, -6 * h, 6 * h, 2 * h * h, -6 * h, 4 * h * h;
+  me << 156, 22 * h, 54, -13 * h, 22 * h, 4 * h * h, 13 * h, -3 * h * h, 54, 13 * h, 156, -22 * h, -13 * h, -3 * h * h, -22 * h, 4 * h * h;
+  ke *= EI / (h * h * h);
+  me *= rhoA * h / 420;
+  for (int e = 0; e < elements; ++e) K.block(2 * e, 2 * e, 4, 4) += ke, M.block(2 * e, 2 * e, 4, 4) += me;
+  if (b.k_theta_Nm_per_rad) K(1, 1) += *b.k_theta_Nm_per_rad;
+  const int prop = static_cast<int>(std::lround(b.prop_from_edge_m / h));
+  Eigen::VectorXd F = Eigen::VectorXd::Zero(n);
+  std::vector<int> pan;
+  for (int i = 0; i < nodes; ++i)
+    if (b.free_length_m - i * h <= b.pan_length_m + 1e-9) pan.push_back(i);
+  for (int i : pan) F(2 * i) = mass_kg * 9.80665 / pan.size(), M(2 * i, 2 * i) += mass_kg / pan.size();
+  std::vector<int> fixed{0, 2 * prop}, free;
+  if (!b.k_theta_Nm_per_rad) fixed.push_back(1);
+  for (int d = 0; d < n; ++d)
+    if (std::find(fixed.begin(), fixed.end(), d) == fixed.end()) free.push_back(d);
+  const Eigen::MatrixXd Kff = K(free, free), Mff = M(free, free);
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Kff, Mff);
+  const Eigen::MatrixXd phi = eig.eigenvectors();  // M-normalised
+  const Eigen::VectorXd omega2 = eig.eigenvalues();
+  const Eigen::VectorXd modal_force = phi.transpose() * F(free);
+  // Sensor row: w interpolated in the element holding the sensor.
+  const int se = std::min(elements - 1, static_cast<int>(b.sensor_from_edge_m / h));
+  const double xi = b.sensor_from_edge_m / h - se;
+  Eigen::VectorXd sensor = Eigen::VectorXd::Zero(n);
+  sensor(2 * se) = 1 - 3 * xi * xi + 2 * xi * xi * xi;
+  sensor(2 * se + 1) = h * (xi - 2 * xi * xi + xi * xi * xi);
+  sensor(2 * se + 2) = 3 * xi * xi - 2 * xi * xi * xi;
+  sensor(2 * se + 3) = h * (-xi * xi + xi * xi * xi);
+  const Eigen::RowVectorXd sensor_free = sensor(free).transpose();
+  // The load cell's force on the beam balances the prop row of K u + C u' + M u'' (minus no load).
+  const Eigen::RowVectorXd Kp = K.row(2 * prop)(free), Mp = M.row(2 * prop)(free);
+  BeamResponse r;
+  for (double t : t_after_drop) {
+    Eigen::VectorXd q(free.size()), qd(free.size()), qdd(free.size());
+    for (Eigen::Index j = 0; j < omega2.size(); ++j) {
+      const double w = std::sqrt(omega2(j)), zeta = b.alpha_s * w / 2 + b.beta_per_s / (2 * w);  // Eq 4, modal
+      if (zeta >= 1) {  // overdamped (the high modes under stiffness-proportional damping)
+        const double root = std::sqrt(zeta * zeta - 1), r1 = -w * (zeta - root), r2 = -w * (zeta + root);
+        const double s = modal_force(j) / omega2(j), e1 = std::exp(r1 * t), e2 = std::exp(r2 * t);
+        q(j) = s * (1 - (r2 * e1 - r1 * e2) / (r2 - r1));
+        qd(j) = -s * r1 * r2 * (e1 - e2) / (r2 - r1);
+        qdd(j) = -s * r1 * r2 * (r1 * e1 - r2 * e2) / (r2 - r1);
+        continue;
+      }
+      const double wd = w * std::sqrt(1 - zeta * zeta), s = modal_force(j) / omega2(j), decay = std::exp(-zeta * w * t);
+      const double c = std::cos(wd * t), sn = std::sin(wd * t), ratio = zeta / std::sqrt(1 - zeta * zeta);
+      q(j) = s * (1 - decay * (c + ratio * sn));
+      qd(j) = s * decay * (w / std::sqrt(1 - zeta * zeta)) * sn;
+      qdd(j) = s * w * w * decay * (c - ratio * sn);  // from q'' = -2 zeta w q' - w^2 (q - s)
+    }
+    const Eigen::VectorXd u = phi * q, ud = phi * qd, udd = phi * qdd;
+    const double damping = b.alpha_s * Kp.dot(ud) + b.beta_per_s * Mp.dot(ud);
+    r.t_s.push_back(t);
+    r.force_N.push_back(-(Kp.dot(u) + damping + Mp.dot(udd)) * b.force_gain);
+    r.deformation_mm.push_back(1000 * sensor_free.dot(u) * b.deformation_gain);
+  }
+  return r;
+}
+
+// The raw recording of one weight: resting baseline, then the response, noise and quantisation.
+inline analysis::SyntheticRecording beamRecording(const BeamTool& b, double mass_kg, const Daq& daq, int repeat = 1) {
+  std::vector<double> t, after;
+  const auto samples = static_cast<long>(std::lround(daq.duration_s * daq.sample_rate_Hz));
+  for (long i = 0; i < samples; ++i) t.push_back(static_cast<double>(i) / daq.sample_rate_Hz);
+  for (double ti : t) after.push_back(std::max(0.0, ti - daq.drop_time_s));
+  const BeamResponse r = beamWeightDrop(b, mass_kg, after);
+  std::mt19937_64 rng(daq.seed + static_cast<std::uint64_t>(repeat) * 7919);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  analysis::SyntheticRecording rec;
+  rec.header = {"t", "force", "deformation"};
+  rec.columns.assign(3, {});
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const bool loaded = t[i] >= daq.drop_time_s;
+    const double force = (loaded ? r.force_N[i] : 0.0) + daq.force_noise_N * noise(rng);
+    const double deformation = (loaded ? r.deformation_mm[i] : 0.0) + daq.deformation_noise_mm * noise(rng);
+    rec.columns[0].push_back(t[i]);
+    rec.columns[1].push_back(std::round(force / daq.force_factor_N_per_unit));
+    rec.columns[2].push_back(std::round(deformation / daq.deformation_factor_mm_per_unit));
+  }
+  rec.sidecar = {{"tool", "tool"},
+                 {"mass_kg", mass_kg},
+                 {"sample_rate_hz", daq.sample_rate_Hz},
+                 {"force_factor", daq.force_factor_N_per_unit},
+                 {"deformation_factor", daq.deformation_factor_mm_per_unit},
+                 {"repeat", repeat}};
+  return rec;
+}
+
+}  // namespace demfem::campaign::test

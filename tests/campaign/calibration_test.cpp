@@ -1,0 +1,114 @@
+// Calibration against recordings made by the project's own model (direct integration, known E and
+// alpha, DAQ noise and quantisation): parameters recovered, non-identification reported, runs cached.
+#include "weight_drop_fixture.hpp"
+
+#include "demfem/campaign/calibration.hpp"
+
+#include <catch2/catch.hpp>
+
+using namespace demfem;
+using campaign::test::TempDir;
+
+namespace {
+
+std::vector<analysis::Recording> recordings(const TempDir& dir, const std::vector<double>& masses, const campaign::test::TruthSettings& truth) {
+  campaign::test::writeRecordings(dir.path(), masses, 2, truth);
+  return analysis::readRecordings({dir.path()});
+}
+
+campaign::CalibrationOptions quickOptions(const std::filesystem::path& cache) {
+  campaign::CalibrationOptions o;
+  o.starts = 2;
+  o.cache_dir = cache;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("the weight-drop preset recovers E within 1 % and alpha within 5 % from both weights", "[campaign]") {
+  const TempDir dir("preset");
+  const campaign::test::TruthSettings truth;  // E 4.5 GPa, alpha 0.8 ms; the study says 4.06 GPa, 0.55 ms
+  const auto recs = recordings(dir, {0.05, 0.1}, truth);
+  const auto study = campaign::test::fixtureStudyJson();
+  const auto stages = campaign::weightDropPreset(study, recs);
+  campaign::WeightDropModel model;
+  const auto options = quickOptions(dir.path() / "cache");
+  const campaign::StagedCalibration c =
+      campaign::calibrateStages(study, campaign::test::fixtureStudyPath().string(), recs, stages, model, options);
+  REQUIRE(c.results.size() == 1);
+  const auto& r = c.results.front();
+  REQUIRE(r.parameters.size() == 2);
+  REQUIRE(r.parameters[0].value);
+  REQUIRE(r.parameters[1].value);
+  CHECK(*r.parameters[0].value == Approx(truth.E_Pa).epsilon(0.01));
+  CHECK(*r.parameters[1].value == Approx(truth.alpha_s).epsilon(0.05));
+  CHECK(r.parameters[0].identified);
+  CHECK(r.parameters[1].identified);
+  CHECK(r.chi2 < r.initial_chi2);
+  CHECK(r.minima.size() == 1);
+  // The calibrated study is a valid study carrying the fitted values.
+  const study::Study calibrated = study::parseStudy(c.calibrated_study.dump(), campaign::test::fixtureStudyPath().string());
+  CHECK(calibrated.tools[0].fem.youngs_Pa == Approx(*r.parameters[0].value));
+  // A repeated calibration reuses every run from the cache.
+  campaign::WeightDropModel fresh;
+  const auto again = campaign::calibrateStages(study, campaign::test::fixtureStudyPath().string(), recs, stages, fresh, options);
+  CHECK(again.results.front().model_runs == 0);
+  CHECK(again.results.front().cache_hits > 0);
+  CHECK(*again.results.front().parameters[0].value == Approx(*r.parameters[0].value).epsilon(1e-12));
+}
+
+TEST_CASE("stiffness- and mass-proportional damping from one weight are reported unidentified", "[campaign]") {
+  const TempDir dir("unidentified");
+  const auto recs = recordings(dir, {0.05}, {});
+  campaign::CalibrationProblem problem{campaign::test::fixtureStudyJson(), campaign::test::fixtureStudyPath().string(), recs,
+                                       {campaign::parseParameterSpec("/tools/0/fem/E_Pa=2e9:8e9:log"),
+                                        campaign::parseParameterSpec("/tools/0/fem/alpha_s=0:2e-3"),
+                                        campaign::parseParameterSpec("/tools/0/fem/beta_per_s=0:50")}};
+  campaign::WeightDropModel model;
+  const auto r = campaign::calibrate(problem, model, quickOptions({}));
+  // One weight rings at one frequency: its damping ratio fixes alpha w / 2 + beta / (2 w), not both
+  // (measured: alpha 0.80 +- 0.43 ms, beta 0.001 +- 19 1/s; E 4.499 +- 0.004 GPa).
+  CHECK(r.parameters[0].identified);
+  CHECK(!r.parameters[1].identified);
+  CHECK(!r.parameters[1].value);
+  CHECK(!r.parameters[2].identified);
+  CHECK(!r.parameters[2].value);
+}
+
+TEST_CASE("bad --fit arguments are errors naming the argument", "[campaign]") {
+  const auto study = campaign::test::fixtureStudyJson();
+  const std::string origin = campaign::test::fixtureStudyPath().string();
+  const auto message = [&](const std::string& arg) {
+    try {
+      campaign::validateParameters(study, origin, {campaign::parseParameterSpec(arg)});
+    } catch (const campaign::ArgumentError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  using Catch::Matchers::Contains;
+  CHECK_THAT(message("/tools/0/fem/E_Pa"), Contains("--fit '/tools/0/fem/E_Pa'") && Contains("PATH=LO:HI"));
+  CHECK_THAT(message("/tools/0/fem/E_Pa=3e9:x"), Contains("--fit '/tools/0/fem/E_Pa=3e9:x'") && Contains("HI 'x'"));
+  CHECK_THAT(message("/tools/0/fem/E_Pa=5e9:3e9"), Contains("LO must be smaller than HI"));
+  CHECK_THAT(message("/tools/0/fem/E_Pa=0:3e9:log"), Contains("log parameter needs LO > 0"));
+  CHECK_THAT(message("/tools/0/fem/E_Pa=1:2:lin"), Contains("third field must be 'log'"));
+  CHECK_THAT(message("/tools/0/fem/Young=1:2"), Contains("--fit '/tools/0/fem/Young=1:2'") && Contains("no value at /tools/0/fem/Young"));
+  CHECK_THAT(message("/tools/0/name=1:2"), Contains("/tools/0/name is not a number"));
+  CHECK_THAT(message("/tools/0/fem/nu=0.1:0.7"), Contains("--fit '/tools/0/fem/nu=0.1:0.7'") && Contains("upper bound 0.7") &&
+                                                      Contains("/tools/0/fem/nu"));
+  CHECK_THAT(message("/tools/0/fem/E_Pa=-1e9:3e9"), Contains("lower bound -1e+09"));
+  CHECK(message("/tools/0/fem/E_Pa=3e9:5e9:log") == "no error");
+}
+
+TEST_CASE("recordings of a case the study cannot run are an error naming the case", "[campaign]") {
+  const TempDir dir("soil_case");
+  analysis::SoilBinTruth soil;
+  soil.tool = "strip";
+  analysis::writeSyntheticRecording(analysis::makeSoilBinRecording(soil, analysis::RecordingFormat::Calibrated), dir.path() / "soil.csv");
+  campaign::CalibrationProblem problem{campaign::test::fixtureStudyJson(), campaign::test::fixtureStudyPath().string(),
+                                       analysis::readRecordings({dir.path()}),
+                                       {campaign::parseParameterSpec("/tools/0/fem/E_Pa=2e9:8e9:log")}};
+  campaign::WeightDropModel model;
+  CHECK_THROWS_WITH(campaign::calibrate(problem, model, quickOptions({})),
+                    Catch::Matchers::Contains("strip, 30 mm depth") && Catch::Matchers::Contains("needs a coupled or dem-only study"));
+}

@@ -1,0 +1,58 @@
+// campaign's modal weight-drop model against the direct integration of fem::simulateWeightDrop
+// (Eq 5-10 on all reduced DOFs), at the reference modulus and after a rescaling of E.
+#include "weight_drop_fixture.hpp"
+
+#include "demfem/campaign/model.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+using namespace demfem;
+
+namespace {
+
+struct Difference {
+  double force = 0, deformation = 0;  // largest |modal - direct| over the run, relative to the static value
+};
+
+Difference compareAt(campaign::WeightDropModel& model, double E_Pa, double alpha_s, double mass_kg) {
+  nlohmann::ordered_json json = campaign::test::fixtureStudyJson();
+  json["tools"][0]["fem"]["E_Pa"] = E_Pa;
+  json["tools"][0]["fem"]["alpha_s"] = alpha_s;
+  const analysis::CaseKey key{analysis::CaseKind::CalibrationWeight, "strip", 0, mass_kg};
+  const study::Study study = campaign::caseStudy(json, campaign::test::fixtureStudyPath().string(), key);
+  const analysis::Recording modal = model.run(study, key, {});
+  const study::Tool& tool = study.tools.front();
+  const fem::WeightDropResult direct = fem::simulateWeightDrop(fem::reduce(fem::buildFullModel(tool)), tool, *study.weight_drop, study.fem.dt_s);
+  const std::size_t lead_in = 100;  // 0.1 s at rest before the weight is hung
+  REQUIRE(modal.size() == direct.samples.size() + lead_in);
+  Difference d;
+  for (std::size_t i = 0; i < modal.size(); ++i) {
+    if (i < lead_in) {
+      CHECK(modal.force[i] == 0);
+      CHECK(modal.deformation[i] == 0);
+      continue;
+    }
+    const auto& s = direct.samples[i - lead_in];
+    CHECK(modal.time_s[i] == Approx(s.t_s + 0.1));
+    d.force = std::max(d.force, std::abs(modal.force[i] - s.force_N) / direct.static_force_N);
+    d.deformation = std::max(d.deformation, std::abs(modal.deformation[i] - s.deformation_mm) / direct.static_deformation_mm);
+  }
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("the modal weight-drop model reproduces the direct integration, also after E and alpha change", "[campaign]") {
+  campaign::WeightDropModel model;
+  const Difference reference = compareAt(model, 4.06e9, 5.5e-4, 0.05);
+  const Difference rescaled = compareAt(model, 5.3e9, 1.2e-3, 0.05);  // the same basis, scaled
+  CHECK(model.basesBuilt() == 2);  // one reduction and one weight's modes for both runs
+
+  CHECK(reference.force < 2e-3);
+  CHECK(reference.deformation < 2e-3);
+  CHECK(rescaled.force < 2e-3);
+  CHECK(rescaled.deformation < 2e-3);
+}
