@@ -11,7 +11,6 @@
 #include <cstdio>
 #include <map>
 #include <optional>
-#include <sstream>
 
 namespace demfem::builtin {
 
@@ -143,7 +142,17 @@ class BuiltinBackend final : public adapter::CouplingApi {
 
   void checkpoint(const std::filesystem::path& file) override {
     alive();
-constexpr char kCheckpointKind[] = "builtin";
+    adapter::PayloadWriter out;
+    sim_.saveState(out);
+    out.put(last_positions_time_);
+    out.put(next_vtk_);
+    out.put(static_cast<std::int64_t>(vtk_count_));
+    out.put(static_cast<std::uint64_t>(interval_mean_.size()));
+    for (const auto& [m, f] : interval_mean_) {
+      out.put(static_cast<std::int64_t>(m));
+      out.putVector(f);
+    }
+    adapter::writeCheckpointFile(file, kCheckpointKind, out.bytes());
   }
 
   // The file is validated completely (container, then every array against this simulation) before
