@@ -309,9 +309,12 @@ struct DemSimulation::CellGrid {
   double size = 0;
   int n[3] = {1, 1, 1};
   std::vector<std::int32_t> start, items;  // counting-sorted particle ids per cell
+  // Clamped before the conversion: a wall node far outside the grid (a peer may place a mesh
+  // anywhere) or a non-finite one lands in an edge cell instead of overflowing the int.
   int cellOf(double c, int axis) const {
-    const int k = static_cast<int>(std::floor((c - lo[axis]) / size));
-    return std::clamp(k, 0, n[axis] - 1);
+    const double k = std::floor((c - lo[axis]) / size);
+    if (!(k > 0)) return 0;
+    return static_cast<int>(std::min(k, static_cast<double>(n[axis] - 1)));
   }
   std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; }
 };
