@@ -9,6 +9,7 @@ packages=(
   catch2 libcli11-dev libnlopt-cxx-dev libnlopt-dev
   liggghts libliggghts-dev openmpi-bin libopenmpi-dev
   calculix-ccx python3-zmq python3-numpy gnuplot-nox
+  clang libclang-rt-dev libomp-dev
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -30,13 +30,14 @@ RemoteProxy::RemoteProxy(const RemoteOptions& options, zmq::context_t* context) 
                                                         std::to_string(hello.protocol_version) + ", this client " +
                                                         std::to_string(p::kProtocolVersion));
   info_ = {hello.backend, hello.backend_version, hello.protocol_version, hello.dem_time_step_s, hello.soil_json};
+  session_ = hello.session;
 }
 
 RemoteProxy::~RemoteProxy() = default;
 
 p::ReplyBody RemoteProxy::call(p::RequestBody body) {
   if (shut_down_) throw CouplingError(ErrorCode::BadRequest, "remote DEM backend at " + endpoint_ + " was shut down");
-  const p::Request request{++seq_, std::move(body)};
+  const p::Request request{++seq_, std::move(body), session_};
   const std::string op = p::opName(request.body);
   p::Reply reply;
   try {
@@ -91,12 +92,25 @@ void RemoteProxy::setRigidMotion(const std::string& geometry, const RigidMotion&
   expect<p::Ack>(call(p::SetRigidMotion{geometry, wire::toWire(motion)}), endpoint_, "set_rigid_motion");
 }
 
+namespace {
+
+std::string checkpointName(const std::filesystem::path& file, const std::string& endpoint) {
+  if (!p::isCheckpointName(file.string()))
+    throw CouplingError(ErrorCode::BadRequest,
+                        "checkpoint '" + file.string() + "' for the DEM server " + endpoint +
+                            ": remote checkpoints are named, not located (letters, digits, '.', '_', '-'; no "
+                            "directory); the server keeps them in its --checkpoint-dir");
+  return file.string();
+}
+
+}  // namespace
+
 void RemoteProxy::checkpoint(const std::filesystem::path& file) {
-  expect<p::Ack>(call(p::Checkpoint{file.string()}), endpoint_, "checkpoint");
+  expect<p::Ack>(call(p::Checkpoint{checkpointName(file, endpoint_)}), endpoint_, "checkpoint");
 }
 
 void RemoteProxy::restore(const std::filesystem::path& file) {
-  expect<p::Ack>(call(p::Restore{file.string()}), endpoint_, "restore");
+  expect<p::Ack>(call(p::Restore{checkpointName(file, endpoint_)}), endpoint_, "restore");
 }
 
 void RemoteProxy::shutdown() {

@@ -3,6 +3,8 @@
 #include "wire_conversions.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <random>
 #include <sstream>
 
 namespace demfem::adapter {
@@ -20,30 +22,81 @@ std::string secondsText(std::chrono::milliseconds ms) {
   return text.str();
 }
 
+// 128 random bits as 32 hex digits.
+std::string newSessionToken() {
+  std::random_device random;
+  std::string token;
+  for (int i = 0; i < 4; ++i) {
+    char part[9];
+    std::snprintf(part, sizeof part, "%08x", static_cast<unsigned>(random()));
+    token += part;
+  }
+  return token;
+}
+
 }  // namespace
 
-Server::Server(CouplingApi& api) : api_(api) {}
+Server::Server(CouplingApi& api, ServerOptions options) : api_(api), options_(std::move(options)) {}
 
-p::ReplyBody Server::dispatch(const p::Request& request) {
-  if (shutdown_done_) throw CouplingError(ErrorCode::BadRequest, "the backend has been shut down");
-  const bool is_hello = std::holds_alternative<p::Hello>(request.body);
-  if (!hello_done_ && !is_hello)
+bool Server::sessionOpen(Clock::time_point now) const {
+  return session_ && now - session_->last_seen <= options_.idle_timeout;
+}
+
+bool Server::endIdleSession(Clock::time_point now) {
+  if (!session_ || sessionOpen(now)) return false;
+  log("session ended: its client sent nothing for " + secondsText(options_.idle_timeout));
+  session_.reset();
+  return true;
+}
+
+void Server::log(const std::string& text) const {
+  if (options_.log) options_.log(text);
+}
+
+p::ReplyBody Server::hello(const p::PeerAddress& from, const p::Request& request, Clock::time_point now) {
+  if (session_ && from.routing_id != session_->owner.routing_id)
+    throw CouplingError(ErrorCode::Busy, "busy: this server is serving another client; a new session can start "
+                                         "after it shuts down or sends nothing for " +
+                                             secondsText(options_.idle_timeout));
+  const auto& r = std::get<p::Hello>(request.body);
+  if (r.protocol_version != p::kProtocolVersion)
+    throw CouplingError(ErrorCode::VersionMismatch, "client speaks protocol version " +
+                                                        std::to_string(r.protocol_version) + ", this server version " +
+                                                        std::to_string(p::kProtocolVersion));
+  const BackendInfo info = api_.info();
+  session_ = Session{from, newSessionToken(), request.seq, now};
+  log("session opened by '" + r.client + "'");
+  p::HelloReply reply{p::kProtocolVersion, info.backend, info.version, info.dem_time_step_s,
+                      session_->token,      options_.max_simulate_s};
+  reply.soil_json = info.soil_json;
+  return reply;
+}
+
+void Server::checkOwner(const p::PeerAddress& from, const p::Request& request, Clock::time_point now) {
+  if (!session_)
     throw CouplingError(ErrorCode::BadRequest, "the first request of a session must be 'hello', got '" +
                                                    p::opName(request.body) + "'");
-  if (hello_done_ && request.seq <= last_seq_)
+  if (from.routing_id != session_->owner.routing_id || request.session != session_->token)
+    throw CouplingError(ErrorCode::Busy, "busy: the session belongs to another connection (or the session token "
+                                         "is wrong); say hello once it has ended");
+  session_->last_seen = now;
+  if (request.seq <= session_->last_seq)
     throw CouplingError(ErrorCode::BadRequest, "request out of order: seq " + std::to_string(request.seq) +
-                                                   " after seq " + std::to_string(last_seq_));
+                                                   " after seq " + std::to_string(session_->last_seq));
+}
+
+std::filesystem::path Server::checkpointPath(const std::string& name) const {
+  if (options_.checkpoint_dir.empty())
+    throw CouplingError(ErrorCode::Unsupported,
+                        "this server keeps no checkpoints (start demfem-dem with --checkpoint-dir DIR)");
+  if (!p::isCheckpointName(name)) throw CouplingError(ErrorCode::BadRequest, "not a checkpoint name");
+  return options_.checkpoint_dir / name;
+}
+
+p::ReplyBody Server::serveCall(const p::Request& request) {
   return std::visit(
       Overloaded{
-          [&](const p::Hello& r) -> p::ReplyBody {
-            if (r.protocol_version != p::kProtocolVersion)
-              throw CouplingError(ErrorCode::VersionMismatch,
-                                  "client speaks protocol version " + std::to_string(r.protocol_version) +
-                                      ", this server version " + std::to_string(p::kProtocolVersion));
-            const BackendInfo info = api_.info();
-            hello_done_ = true;
-            return p::HelloReply{p::kProtocolVersion, info.backend, info.version, info.dem_time_step_s, info.soil_json};
-          },
+          [&](const p::Hello&) -> p::ReplyBody { throw CouplingError(ErrorCode::Internal, "hello dispatched as a call"); },
           [&](const p::ListGeometries&) -> p::ReplyBody {
             p::GeometriesReply reply;
             for (auto& g : api_.geometries()) reply.geometries.push_back({g.name, g.node_count, std::move(g.triangles)});
@@ -61,6 +114,11 @@ p::ReplyBody Server::dispatch(const p::Request& request) {
             return p::Ack{};
           },
           [&](const p::Simulate& r) -> p::ReplyBody {
+            if (!(r.duration_s <= options_.max_simulate_s))
+              throw CouplingError(ErrorCode::BadRequest,
+                                  "simulate duration " + std::to_string(r.duration_s) + " s exceeds this server's limit of " +
+                                      std::to_string(options_.max_simulate_s) +
+                                      " s per call (demfem-dem --max-simulate-s, study coupling.max_simulate_s)");
             api_.simulate(r.duration_s);
             return p::TimeReply{api_.time()};
           },
@@ -72,23 +130,43 @@ p::ReplyBody Server::dispatch(const p::Request& request) {
             return p::Ack{};
           },
           [&](const p::Checkpoint& r) -> p::ReplyBody {
-            api_.checkpoint(r.file);
+            api_.checkpoint(checkpointPath(r.name));
             return p::Ack{};
           },
           [&](const p::Restore& r) -> p::ReplyBody {
-            api_.restore(r.file);
+            const auto file = checkpointPath(r.name);
+            try {
+              api_.restore(file);
+            } catch (const std::exception& e) {
+              const auto* coupling = dynamic_cast<const CouplingError*>(&e);
+              if (coupling && coupling->code() == ErrorCode::Unsupported) throw;
+              log("restore of checkpoint '" + r.name + "' failed: " + e.what());
+              throw CouplingError(ErrorCode::BadRequest, "restore of checkpoint '" + r.name +
+                                                             "' failed: no valid checkpoint of that name (state unchanged)");
+            }
             return p::Ack{};
           },
           [&](const p::Shutdown&) -> p::ReplyBody {
             api_.shutdown();
             shutdown_done_ = true;
+            session_.reset();
             return p::Ack{};
           },
       },
       request.body);
 }
 
-p::Multipart Server::handle(const p::Multipart& message) noexcept {
+p::ReplyBody Server::dispatch(const p::PeerAddress& from, const p::Request& request, Clock::time_point now) {
+  if (shutdown_done_) throw CouplingError(ErrorCode::BadRequest, "the backend has been shut down");
+  endIdleSession(now);
+  if (std::holds_alternative<p::Hello>(request.body)) return hello(from, request, now);
+  checkOwner(from, request, now);
+  p::ReplyBody reply = serveCall(request);
+  if (session_) session_->last_seq = request.seq;
+  return reply;
+}
+
+p::Multipart Server::handle(const p::PeerAddress& from, const p::Multipart& message, Clock::time_point now) noexcept {
   try {
     p::Request request;
     try {
@@ -98,8 +176,7 @@ p::Multipart Server::handle(const p::Multipart& message) noexcept {
     }
     p::Reply reply{request.seq, p::opName(request.body), p::Ack{}};
     try {
-      reply.body = dispatch(request);
-      last_seq_ = request.seq;
+      reply.body = dispatch(from, request, now);
     } catch (const CouplingError& e) {
       reply.body = p::ErrorReply{wire::toWire(e.code()), e.what()};
     } catch (const std::exception& e) {
@@ -112,18 +189,26 @@ p::Multipart Server::handle(const p::Multipart& message) noexcept {
   }
 }
 
-void Server::serve(p::ServerSocket& socket, const ServeOptions& options) {
+void Server::serve(p::ServerSocket& socket, std::chrono::milliseconds hello_timeout) {
+  // Without a session: wait for a hello up to hello_timeout at the start, and up to the idle timeout
+  // after a session ended (its client may reconnect).
+  auto waiting_since = Clock::now();
+  auto window = hello_timeout;
   while (!shutdown_done_) {
-    const auto timeout = hello_done_ ? options.idle_timeout : options.first_request_timeout;
-    auto request = socket.receive(timeout);
-    if (!request) {
-      api_.shutdown();
-      throw CouplingError(ErrorCode::PeerGone, std::string("no request from a FEM client on ") + socket.endpoint() +
-                                                   " within " + secondsText(timeout) +
-                                                   (hello_done_ ? " (the client is gone?)" : " (no client connected)") +
-                                                   "; backend shut down");
+    const auto now = Clock::now();
+    if (endIdleSession(now)) {
+      waiting_since = now;
+      window = options_.idle_timeout;
     }
-    socket.send(handle(*request));
+    const bool open = session_.has_value();
+    const auto deadline = open ? session_->last_seen + options_.idle_timeout : waiting_since + window;
+    if (!open && now >= deadline) {
+      api_.shutdown();
+      throw CouplingError(ErrorCode::PeerGone, "no request from a FEM client on " + socket.endpoint() + " within " +
+                                                   secondsText(window) + " (no session open); backend shut down");
+    }
+    const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now) + std::chrono::milliseconds(1);
+    if (auto in = socket.receive(wait)) socket.send(in->from, handle(in->from, in->message));
   }
 }
 

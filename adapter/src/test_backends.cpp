@@ -1,10 +1,9 @@
 #include "demfem/adapter/test_backends.hpp"
 
+#include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/adapter/plate_surface.hpp"
 
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <numbers>
 
 namespace demfem::adapter {
@@ -21,8 +20,6 @@ struct Geometry {
   std::vector<std::int32_t> tip_nodes;
   RigidMotion motion;
 };
-
-constexpr char kCheckpointMagic[] = "demfem-test-backend-1";
 
 class AnalyticBackend final : public CouplingApi {
  public:
@@ -110,10 +107,9 @@ class AnalyticBackend final : public CouplingApi {
 
   void simulate(double duration_s) override {
     live();
-    if (!(duration_s >= 0) || !std::isfinite(duration_s))
-      throw CouplingError(ErrorCode::BadRequest, "simulate(" + std::to_string(duration_s) + "): duration must be finite and >= 0");
+    const std::int64_t steps = demStepCount(duration_s, load_.dem_time_step_s, step_);
     interval_start_step_ = step_;
-    step_ += std::llround(duration_s / load_.dem_time_step_s);
+    step_ += steps;
   }
 
   RigidMotion rigidMotion(const std::string& geometry) override { return find(geometry).motion; }
@@ -121,43 +117,37 @@ class AnalyticBackend final : public CouplingApi {
 
   void checkpoint(const std::filesystem::path& file) override {
     live();
-    std::ofstream out(file, std::ios::binary | std::ios::trunc);
-    if (!out) throw CouplingError(ErrorCode::SimulationFailed, "cannot write checkpoint " + file.string());
-    out.write(kCheckpointMagic, sizeof kCheckpointMagic);
-    writeString(out, name_);
-    writeValue(out, step_);
-    writeValue(out, interval_start_step_);
-    writeValue(out, static_cast<std::uint64_t>(geometries_.size()));
+    PayloadWriter out;
+    out.put(step_);
+    out.put(interval_start_step_);
+    out.put(static_cast<std::uint64_t>(geometries_.size()));
     for (const auto& g : geometries_) {
-      writeString(out, g.name);
-      writeValue(out, static_cast<std::uint64_t>(g.current.size()));
-      out.write(reinterpret_cast<const char*>(g.current.data()), static_cast<std::streamsize>(g.current.size() * sizeof(double)));
-      writeValue(out, g.motion);
+      out.putString(g.name);
+      out.putVector(g.current);
+      out.put(g.motion);
     }
-    if (!out) throw CouplingError(ErrorCode::SimulationFailed, "writing checkpoint " + file.string() + " failed");
+    writeCheckpointFile(file, checkpointKind(), out.bytes());
   }
 
+  // Everything is read and checked into copies first: a refused file changes nothing.
   void restore(const std::filesystem::path& file) override {
     live();
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw CouplingError(ErrorCode::BadRequest, "cannot read checkpoint " + file.string());
-    const auto fail = [&](const std::string& what) {
-      throw CouplingError(ErrorCode::BadRequest, "checkpoint " + file.string() + ": " + what);
-    };
-    char magic[sizeof kCheckpointMagic] = {};
-    in.read(magic, sizeof magic);
-    if (!in || std::memcmp(magic, kCheckpointMagic, sizeof magic) != 0) fail("not a test-backend checkpoint");
-    if (readString(in) != name_) fail("written by another test backend kind");
-    auto step = readValue<std::int64_t>(in), start = readValue<std::int64_t>(in);
-    if (readValue<std::uint64_t>(in) != geometries_.size()) fail("geometry count differs");
+    const std::string payload = readCheckpointFile(file, checkpointKind());
+    PayloadReader in(payload, "checkpoint " + file.string());
+    const auto step = in.get<std::int64_t>(), start = in.get<std::int64_t>();
+    if (step < 0 || step > kMaxDemSteps || start < 0 || start > step) in.fail("step counts out of range");
+    if (in.get<std::uint64_t>() != geometries_.size()) in.fail("geometry count differs from this backend's");
     std::vector<Geometry> restored = geometries_;
     for (auto& g : restored) {
-      if (readString(in) != g.name) fail("geometry '" + g.name + "' missing");
-      if (readValue<std::uint64_t>(in) != g.current.size()) fail("node count of '" + g.name + "' differs");
-      in.read(reinterpret_cast<char*>(g.current.data()), static_cast<std::streamsize>(g.current.size() * sizeof(double)));
-      g.motion = readValue<RigidMotion>(in);
+      if (in.getString() != g.name) in.fail("geometry '" + g.name + "' missing");
+      auto current = in.getVector<double>();
+      if (current.size() != g.undeformed.size()) in.fail("node count of '" + g.name + "' differs");
+      for (double c : current)
+        if (!std::isfinite(c)) in.fail("a node position of '" + g.name + "' is not finite");
+      g.current = std::move(current);
+      g.motion = in.get<RigidMotion>();
     }
-    if (!in) fail("truncated");
+    in.finish();
     geometries_ = std::move(restored);
     step_ = step;
     interval_start_step_ = start;
@@ -166,25 +156,7 @@ class AnalyticBackend final : public CouplingApi {
   void shutdown() override { shut_down_ = true; }
 
  private:
-  template <class T> static void writeValue(std::ofstream& out, const T& v) {
-    out.write(reinterpret_cast<const char*>(&v), sizeof v);
-  }
-  template <class T> static T readValue(std::ifstream& in) {
-    T v{};
-    in.read(reinterpret_cast<char*>(&v), sizeof v);
-    return v;
-  }
-  static void writeString(std::ofstream& out, const std::string& s) {
-    writeValue(out, static_cast<std::uint64_t>(s.size()));
-    out.write(s.data(), static_cast<std::streamsize>(s.size()));
-  }
-  static std::string readString(std::ifstream& in) {
-    const auto n = readValue<std::uint64_t>(in);
-    if (!in || n > 4096) return {};
-    std::string s(n, '\0');
-    in.read(s.data(), static_cast<std::streamsize>(n));
-    return s;
-  }
+  std::string checkpointKind() const { return "test-" + name_; }
 
   double timeAt(std::int64_t step) const { return static_cast<double>(step) * load_.dem_time_step_s; }
 

@@ -16,6 +16,8 @@ static_assert(static_cast<int>(ErrorCode::Timeout) == static_cast<int>(protocol:
 static_assert(static_cast<int>(ErrorCode::PeerGone) == static_cast<int>(protocol::WireError::PeerGone));
 static_assert(static_cast<int>(ErrorCode::Unsupported) == static_cast<int>(protocol::WireError::Unsupported));
 static_assert(static_cast<int>(ErrorCode::Internal) == static_cast<int>(protocol::WireError::Internal));
+static_assert(static_cast<int>(ErrorCode::Busy) == static_cast<int>(protocol::WireError::Busy));
+static_assert(static_cast<int>(ErrorCode::Busy) == protocol::kLastWireError);
 
 inline ErrorCode toApi(protocol::WireError code) { return static_cast<ErrorCode>(code); }
 inline protocol::WireError toWire(ErrorCode code) { return static_cast<protocol::WireError>(code); }

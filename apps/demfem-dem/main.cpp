@@ -27,6 +27,8 @@ struct Options {
   std::string curve_keys;
   std::string make_curve_keys;
   std::string endpoint_file;
+  std::string checkpoint_dir;
+  double max_simulate_s = 0;  // 0: the study's coupling.max_simulate_s
   std::string output_dir;
   double connect_timeout_s = 600;
   double idle_timeout_s = 0;  // 0: the study's coupling timeout x 2
@@ -126,8 +128,18 @@ void run(const Options& o) {
   }
   std::cerr << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
             << (security ? " (CurveZMQ)" : "") << std::endl;
-  adapter::Server server(*api);
-  server.serve(socket, {millis(o.connect_timeout_s), millis(idle_s)});
+  adapter::ServerOptions options;
+  options.idle_timeout = millis(idle_s);
+  options.max_simulate_s = o.max_simulate_s > 0 ? o.max_simulate_s
+                           : study                ? study->coupling.max_simulate_s
+                                                  : study::kDefaultMaxSimulateS;
+  if (!o.checkpoint_dir.empty()) {
+    std::filesystem::create_directories(o.checkpoint_dir);
+    options.checkpoint_dir = std::filesystem::canonical(o.checkpoint_dir);
+  }
+  options.log = [](const std::string& text) { std::cerr << "demfem-dem: " << text << std::endl; };
+  adapter::Server server(*api, options);
+  server.serve(socket, millis(o.connect_timeout_s));
   std::cerr << "demfem-dem: shut down by the client" << std::endl;
 }
 
@@ -152,6 +164,12 @@ int main(int argc, char** argv) {
   app.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
       ->check(CLI::PositiveNumber);
   app.add_option("--endpoint-file", o.endpoint_file, "Write the bound endpoint (with the chosen port) to FILE");
+  app.add_option("--checkpoint-dir", o.checkpoint_dir,
+                 "Directory of the checkpoints the client names (created if missing); without it checkpoint and "
+                 "restore are refused");
+  app.add_option("--max-simulate-s", o.max_simulate_s,
+                 "Longest simulate call accepted (s); default: the study's coupling.max_simulate_s, else 1")
+      ->check(CLI::PositiveNumber);
   app.add_option("--output", o.output_dir, "Directory of the DEM's own files (builtin: VTK); default: the study's output.directory");
   app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")
       ->check(CLI::PositiveNumber);

@@ -2,6 +2,9 @@
 // demfem-fem (the FEM client), connected over ipc://. Both executables are found next to this one.
 // Ctrl-C / SIGTERM are forwarded to both; if either fails, the other is stopped. The FEM client
 // leaves its outputs complete or marked incomplete (fem/coupled_driver.hpp).
+// The ipc socket lives in a private run directory (mkdtemp: mode 0700, unpredictable name, never an
+// existing directory). The children die with this process (PR_SET_PDEATHSIG), also when it is
+// killed by SIGKILL; its run directory is then removed by the next `demfem run` of the same user.
 #include "commands.hpp"
 
 #include "demfem/adapter/settled_soil.hpp"
@@ -10,13 +13,16 @@
 #include "demfem/study/study.hpp"
 
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <fstream>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -48,15 +54,23 @@ struct RunOptions {
   bool allow_unsettled_soil = false;
 };
 
-// A child process started with posix_spawn; waited for at most once.
+// A child process (fork + exec); waited for at most once. It gets SIGTERM when this process dies,
+// however it dies (the FEM client then marks its outputs incomplete).
 class Child {
  public:
   Child(std::string name, const std::vector<std::string>& args) : name_(std::move(name)) {
     std::vector<char*> argv;
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
-    if (const int rc = posix_spawn(&pid_, args[0].c_str(), nullptr, nullptr, argv.data(), environ); rc != 0)
-      throw std::runtime_error("cannot start " + args[0] + ": " + std::strerror(rc));
+    const pid_t parent = getpid();
+    pid_ = fork();
+    if (pid_ < 0) throw std::runtime_error("cannot start " + args[0] + ": " + std::strerror(errno));
+    if (pid_ == 0) {
+      // Only async-signal-safe calls here. If the parent died before prctl, getppid() tells.
+      if (prctl(PR_SET_PDEATHSIG, SIGTERM) != 0 || getppid() != parent) _exit(127);
+      execve(argv[0], argv.data(), environ);
+      _exit(127);
+    }
   }
   ~Child() {
     if (running()) {
@@ -108,11 +122,60 @@ fs::path siblingExecutable(const std::string& name) {
   return exe;
 }
 
-// Ends this process by `signal` (so the caller's shell sees how it ended). Raising it skips the
-// destructors, so the run's temporary directory is removed here first.
-[[noreturn]] void endBySignal(int signal, const fs::path& work_dir) {
+constexpr const char* kRunDirectoryPrefix = "demfem-run-";
+constexpr const char* kOwnerFile = "demfem.pid";
+
+// Removes run directories of this user's earlier runs whose front end is gone (killed before it
+// could remove them). A directory without an owner file may be a run starting up: it stays.
+void removeStaleRunDirectories(const fs::path& parent) {
   std::error_code ec;
-  fs::remove_all(work_dir, ec);
+  for (const auto& entry : fs::directory_iterator(parent, ec)) {
+    const std::string name = entry.path().filename().string();
+    struct stat info {};
+    if (name.rfind(kRunDirectoryPrefix, 0) != 0 || lstat(entry.path().c_str(), &info) != 0 || !S_ISDIR(info.st_mode) ||
+        info.st_uid != getuid())
+      continue;
+    long pid = 0;
+    std::ifstream(entry.path() / kOwnerFile) >> pid;
+    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
+  }
+}
+
+// The run's private directory, removed when the run ends.
+class RunDirectory {
+ public:
+  RunDirectory() {
+    const fs::path parent = fs::temp_directory_path();
+    removeStaleRunDirectories(parent);
+    std::string name = (parent / (std::string(kRunDirectoryPrefix) + "XXXXXX")).string();
+    if (!mkdtemp(name.data()))  // mode 0700, a new directory or an error
+      throw std::runtime_error("cannot create a private run directory in " + parent.string() + ": " + std::strerror(errno));
+    path_ = name;
+    std::ofstream owner(path_ / kOwnerFile);
+    owner << getpid() << '\n';
+    owner.close();
+    if (!owner) {
+      remove();
+      throw std::runtime_error("cannot write " + (path_ / kOwnerFile).string());
+    }
+  }
+  ~RunDirectory() { remove(); }
+  RunDirectory(const RunDirectory&) = delete;
+  RunDirectory& operator=(const RunDirectory&) = delete;
+  const fs::path& path() const { return path_; }
+  void remove() const {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+
+ private:
+  fs::path path_;
+};
+
+// Ends this process by `signal` (so the caller's shell sees how it ended). Raising it skips the
+// destructors, so the run's directory is removed here first.
+[[noreturn]] void endBySignal(int signal, const RunDirectory& work) {
+  work.remove();
   std::signal(signal, SIG_DFL);
   std::raise(signal);
   std::abort();
@@ -129,14 +192,9 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
     if (fs::exists(soil)) requireSettled(adapter::readSettledSoil(soil, study), soil, o.allow_unsettled_soil);
   }
   const fs::path dem_exe = siblingExecutable("demfem-dem"), fem_exe = siblingExecutable("demfem-fem");
-  const fs::path work = fs::temp_directory_path() / ("demfem-run-" + std::to_string(getpid()));
-  fs::create_directories(work);
-  struct Cleanup {
-    fs::path dir;
-    ~Cleanup() { std::error_code ec; fs::remove_all(dir, ec); }
-  } cleanup{work};
-  const std::string endpoint = "ipc://" + (work / "dem.ipc").string();
-  const fs::path endpoint_file = work / "endpoint";
+  const RunDirectory work;
+  const std::string endpoint = "ipc://" + (work.path() / "dem.ipc").string();
+  const fs::path endpoint_file = work.path() / "endpoint";
 
   std::signal(SIGINT, onForwardedSignal);
   std::signal(SIGTERM, onForwardedSignal);
@@ -147,6 +205,11 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   if (o.threads > 0) dem_args.insert(dem_args.end(), {"--threads", std::to_string(o.threads)});
   if (o.allow_unsettled_soil) dem_args.push_back("--allow-unsettled-soil");
   if (!o.output_dir.empty()) dem_args.insert(dem_args.end(), {"--output", o.output_dir});
+  if (o.checkpoint_every > 0 || o.resume) {
+    // The DEM keeps its checkpoints next to the FEM's (fem/coupled_driver.hpp names them).
+    const fs::path output = !o.output_dir.empty() ? fs::path(o.output_dir) : study.output.directory;
+    dem_args.insert(dem_args.end(), {"--checkpoint-dir", (output / "checkpoint").string()});
+  }
   Child dem("demfem-dem", dem_args);
 
   // The DEM server binds after building its backend (deposition may take a while): wait for it.

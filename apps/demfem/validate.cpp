@@ -69,7 +69,7 @@ void addValidateCommand(CLI::App& app) {
           if (!hash.empty()) std::cout << "soil_hash = " << hash << '\n';
           std::cout << describeCost(cost) << '\n';
         }
-        nlohmann::json entry{{"file", file}, {"valid", true}, {"effective", study::toJson(s)}, {"cost", costJson(cost)}};
+        nlohmann::json entry{{"file", study::validUtf8(file)}, {"valid", true}, {"effective", study::toJson(s)}, {"cost", costJson(cost)}};
         if (!hash.empty()) entry["soil_hash"] = hash;
         report["studies"].push_back(entry);
       } catch (const study::StudyError& e) {
@@ -77,7 +77,7 @@ void addValidateCommand(CLI::App& app) {
         std::cerr << e.what() << '\n';
         nlohmann::json problems = nlohmann::json::array();
         for (const study::Issue& issue : e.issues()) problems.push_back({{"path", issue.path}, {"message", issue.message}});
-        report["studies"].push_back({{"file", file}, {"valid", false}, {"issues", problems}});
+        report["studies"].push_back({{"file", e.file()}, {"valid", false}, {"issues", problems}});
       }
     }
     writeJson(json_target, report);

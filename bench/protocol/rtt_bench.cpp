@@ -30,8 +30,10 @@ Result measure(const std::string& transport, const std::string& endpoint, int re
   auto backend = adapter::makeTestBackend("constant", {pmma}, adapter::TestLoad{});
   zmq::context_t context(1);
   protocol::ServerSocket socket(context, endpoint);
-  adapter::Server server(*backend);
-  std::thread thread([&] { server.serve(socket, {10s, 10s}); });
+  adapter::ServerOptions options;
+  options.idle_timeout = 10s;
+  adapter::Server server(*backend, options);
+  std::thread thread([&] { server.serve(socket, 10s); });
   adapter::RemoteProxy dem({socket.endpoint(), 10s, std::nullopt, "bench"}, &context);
   adapter::NodeArray x = dem.nodePositions("tool");
   if (x.size() != 738 * 3) throw std::runtime_error("expected the PMMA tool's 738 keypoints");

@@ -386,13 +386,13 @@ struct CoupledDriver::Impl {
     }
     put(out, last_);
     adapter::writeFileAtomically(checkpointDir() / "fem_state.bin", out.str());  // commits the checkpoint
-    if (last_checkpoint_step_ >= 0) fs::remove(demCheckpoint(last_checkpoint_step_));
+    // `demfem run` gives the DEM this checkpoint directory; elsewhere there is nothing here to remove.
+    if (last_checkpoint_step_ >= 0) fs::remove(checkpointDir() / demCheckpoint(last_checkpoint_step_));
     last_checkpoint_step_ = s.step;
   }
 
-  fs::path demCheckpoint(std::int64_t step) const {
-    return fs::absolute(checkpointDir() / ("dem_" + std::to_string(step) + ".ckpt"));
-  }
+  // A name, not a path: the DEM keeps its checkpoints in its own directory (docs/protocol.md).
+  static std::string demCheckpoint(std::int64_t step) { return "dem_" + std::to_string(step) + ".ckpt"; }
 
   DriverState restoreCheckpoint() {
     const fs::path file = checkpointDir() / "fem_state.bin";

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -174,9 +175,22 @@ void encodeBody(const SetRigidMotion& r, json& h, Multipart& m) {
   h["geometry"] = r.geometry;
   m.push_back(motionFrame(r.motion));
 }
-void encodeBody(const Checkpoint& r, json& h, Multipart&) { h["file"] = r.file; }
-void encodeBody(const Restore& r, json& h, Multipart&) { h["file"] = r.file; }
+void encodeBody(const Checkpoint& r, json& h, Multipart&) { h["name"] = r.name; }
+void encodeBody(const Restore& r, json& h, Multipart&) { h["name"] = r.name; }
 void encodeBody(const Shutdown&, json&, Multipart&) {}
+
+std::string checkpointNameField(const json& header) {
+  const std::string name = stringField(header, "name");
+  if (!isCheckpointName(name))
+    bad("header field 'name' must be a checkpoint name: 1 to " + std::to_string(kMaxCheckpointNameBytes) +
+        " characters of A-Z a-z 0-9 . _ -, not starting with '.' (a name, never a path)");
+  return name;
+}
+
+// An optional string field: empty when absent.
+std::string optionalString(const json& header, const char* key) {
+  return header.contains(key) ? stringField(header, key) : std::string();
+}
 
 RequestBody decodeBody(const std::string& op, const json& h, const Multipart& m) {
   const auto noFrames = [&] { expectFrames(m, 1, op); };
@@ -211,8 +225,8 @@ RequestBody decodeBody(const std::string& op, const json& h, const Multipart& m)
     expectFrames(m, 2, op);
     return SetRigidMotion{stringField(h, "geometry"), motionFrom(m[1])};
   }
-  if (op == "checkpoint") return noFrames(), Checkpoint{stringField(h, "file")};
-  if (op == "restore") return noFrames(), Restore{stringField(h, "file")};
+  if (op == "checkpoint") return noFrames(), Checkpoint{checkpointNameField(h)};
+  if (op == "restore") return noFrames(), Restore{checkpointNameField(h)};
   if (op == "shutdown") return noFrames(), Shutdown{};
   bad("unknown operation '" + op + "'");
 }
@@ -249,6 +263,8 @@ void encodeBody(const HelloReply& r, json& h, Multipart&) {
     if (!soil.is_object()) bad("hello reply: soil must be the text of a JSON object");
     h["soil"] = std::move(soil);
   }
+  if (!r.session.empty()) h["session"] = r.session;
+  if (r.max_simulate_s > 0) h["max_simulate_s"] = r.max_simulate_s;
 }
 void encodeBody(const GeometriesReply& r, json& h, Multipart& m) {
   json list = json::array();
@@ -272,13 +288,16 @@ ReplyBody decodeReplyBody(const std::string& op, const json& h, const Multipart&
     case ReplyKind::Hello: {
       expectFrames(m, 1, op);
       const double dt = numberField(h, "dem_time_step_s");
+      const double max_simulate = h.contains("max_simulate_s") ? numberField(h, "max_simulate_s") : 0.0;
       std::string soil;
       if (h.contains("soil")) {
         if (!h["soil"].is_object()) bad("header field 'soil' must be an object");
         soil = h["soil"].dump();
       }
-      return HelloReply{int32Field(h, "protocol_version"), stringField(h, "backend"),
-                        stringField(h, "backend_version"), dt, std::move(soil)};
+      HelloReply reply{int32Field(h, "protocol_version"), stringField(h, "backend"),
+                       stringField(h, "backend_version"), dt, optionalString(h, "session"), max_simulate};
+      reply.soil_json = std::move(soil);
+      return reply;
     }
     case ReplyKind::Geometries: {
       const json& list = field(h, "geometries");
@@ -326,6 +345,13 @@ ReplyBody decodeReplyBody(const std::string& op, const json& h, const Multipart&
 
 }  // namespace
 
+bool isCheckpointName(const std::string& name) {
+  if (name.empty() || name.size() > kMaxCheckpointNameBytes || name[0] == '.') return false;
+  return std::all_of(name.begin(), name.end(), [](unsigned char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
+  });
+}
+
 std::string opName(const RequestBody& body) {
   return std::visit([](const auto& r) { return std::string(OpTag<std::decay_t<decltype(r)>>::name); }, body);
 }
@@ -333,6 +359,7 @@ std::string opName(const RequestBody& body) {
 Multipart encode(const Request& request) {
   const std::string op = opName(request.body);
   json header = baseHeader(op, request.seq);
+  if (!request.session.empty()) header["session"] = request.session;
   Multipart message(1);
   std::visit([&](const auto& r) { encodeBody(r, header, message); }, request.body);
   message[0] = dumpHeader(header);
@@ -362,6 +389,7 @@ Request decodeRequest(const Multipart& message) {
   const json header = parseHeader(message);
   Request request;
   request.seq = unsignedField(header, "seq");
+  request.session = optionalString(header, "session");
   request.body = decodeBody(stringField(header, "op"), header, message);
   return request;
 }
@@ -374,7 +402,7 @@ Reply decodeReply(const Multipart& message) {
   if (const auto e = header.find("error"); e != header.end()) {
     if (!e->is_object()) bad("header field 'error' must be an object");
     const std::int32_t code = int32Field(*e, "code");
-    if (code < 1 || code > static_cast<std::int32_t>(WireError::Internal))
+    if (code < 1 || code > kLastWireError)
       bad("error code " + std::to_string(code) + " is not a protocol error code");
     expectFrames(message, 1, "error");
     reply.body = ErrorReply{static_cast<WireError>(code), stringField(*e, "message")};

@@ -2,6 +2,7 @@
 
 #include <zmq_addon.hpp>
 
+#include <cstring>
 #include <fstream>
 #include <regex>
 #include <stdexcept>
@@ -72,7 +73,16 @@ ClientSecurity loadClientSecurity(const fs::path& dir) {
 }
 
 void checkBindEndpoint(const std::string& endpoint, bool with_curve) {
-  if (endpoint.rfind("inproc://", 0) == 0 || endpoint.rfind("ipc://", 0) == 0) return;
+  if (endpoint.rfind("inproc://", 0) == 0) return;
+  if (endpoint.rfind("ipc://", 0) == 0) {
+    const fs::path path = endpoint.substr(6);
+    std::error_code error;
+    const fs::file_status status = fs::symlink_status(path, error);
+    if (fs::exists(status) && status.type() != fs::file_type::socket)
+      throw std::invalid_argument("refusing to bind '" + endpoint + "': " + path.string() +
+                                  " exists and is not a socket (binding would delete it)");
+    return;
+  }
   static const std::regex tcp(R"(tcp://(\[[^\]]+\]|[^:\[\]]+):(\d+|\*))");
   std::smatch m;
   if (!std::regex_match(endpoint, m, tcp))
@@ -129,7 +139,7 @@ ServerSocket::ServerSocket(zmq::context_t& context, const std::string& endpoint,
                            const std::optional<ServerSecurity>& security) {
   checkBindEndpoint(endpoint, security.has_value());
   if (security) zap_ = std::make_unique<ZapHandler>(context, security->authorized_client_key);
-  socket_ = zmq::socket_t(context, zmq::socket_type::rep);
+  socket_ = zmq::socket_t(context, zmq::socket_type::router);
   socket_.set(zmq::sockopt::linger, 0);
   socket_.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
   if (security) {
@@ -149,22 +159,33 @@ ServerSocket::~ServerSocket() {
   socket_.close();  // before the ZAP handler goes
 }
 
-std::optional<Multipart> ServerSocket::receive(std::chrono::milliseconds timeout) {
-  zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
-  if (zmq::poll(&item, 1, timeout) == 0) return std::nullopt;
-  std::vector<zmq::message_t> frames;
-  if (!zmq::recv_multipart(socket_, std::back_inserter(frames))) return std::nullopt;
-  Multipart message;
-  message.reserve(frames.size());
-  for (auto& f : frames) message.emplace_back(static_cast<const char*>(f.data()), f.size());
-  return message;
+std::optional<Incoming> ServerSocket::receive(std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+    if (left.count() <= 0 || zmq::poll(&item, 1, left) == 0) return std::nullopt;
+    std::vector<zmq::message_t> frames;
+    if (!zmq::recv_multipart(socket_, std::back_inserter(frames)) || frames.size() < 2) continue;
+    Incoming in;
+    in.from.routing_id = frames[0].to_string();
+    // A REQ peer puts an empty delimiter between the routing id and frame 0.
+    in.from.delimited = frames[1].size() == 0;
+    const std::size_t first = in.from.delimited ? 2 : 1;
+    in.message.reserve(frames.size() - first);
+    for (std::size_t i = first; i < frames.size(); ++i)
+      in.message.emplace_back(static_cast<const char*>(frames[i].data()), frames[i].size());
+    return in;
+  }
 }
 
-void ServerSocket::send(const Multipart& reply) {
+void ServerSocket::send(const PeerAddress& to, const Multipart& reply) {
   std::vector<zmq::const_buffer> buffers;
-  buffers.reserve(reply.size());
+  buffers.reserve(reply.size() + 2);
+  buffers.emplace_back(to.routing_id.data(), to.routing_id.size());
+  if (to.delimited) buffers.emplace_back(nullptr, 0);
   for (const auto& f : reply) buffers.emplace_back(f.data(), f.size());
-  zmq::send_multipart(socket_, buffers);
+  (void)zmq::send_multipart(socket_, buffers, zmq::send_flags::dontwait);
 }
 
 ClientSocket::ClientSocket(zmq::context_t& context, const std::string& endpoint, std::chrono::milliseconds timeout,
@@ -181,7 +202,7 @@ ClientSocket::ClientSocket(zmq::context_t& context, const std::string& endpoint,
   const std::string monitor_endpoint = "inproc://demfem-client-monitor-" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
   if (zmq_socket_monitor(socket_.handle(), monitor_endpoint.c_str(),
                          ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-                             ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL) != 0)
+                             ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_DISCONNECTED) != 0)
     throw std::runtime_error(std::string("zmq_socket_monitor failed: ") + zmq_strerror(zmq_errno()));
   monitor_ = zmq::socket_t(context, zmq::socket_type::pair);
   monitor_.set(zmq::sockopt::linger, 0);
@@ -224,6 +245,12 @@ Multipart ClientSocket::request(const Multipart& request) {
       std::vector<zmq::message_t> event;
       (void)zmq::recv_multipart(monitor_, std::back_inserter(event));
       broken_ = true;
+      // Frame 0 of a monitor event: u16 event id, u32 value.
+      std::uint16_t id = 0;
+      if (!event.empty() && event[0].size() >= sizeof id) std::memcpy(&id, event[0].data(), sizeof id);
+      if (id == ZMQ_EVENT_DISCONNECTED)
+        throw ProtocolError(WireError::PeerGone, "the DEM server at " + endpoint_ +
+                                                     " closed the connection (it stopped or crashed); no reply will come");
       throw ProtocolError(WireError::PeerGone,
                           "the server at " + endpoint_ +
                               " refused the connection during the security handshake (wrong or missing "

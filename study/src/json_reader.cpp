@@ -106,6 +106,72 @@ std::string formatNumber(double value) {
   return trimZeros(buffer);
 }
 
+namespace {
+
+// Length of the well-formed UTF-8 sequence at the start of `text` (RFC 3629: no overlong forms,
+// no surrogates, at most U+10FFFF), or 0.
+std::size_t utf8SequenceLength(std::string_view text) {
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+  const unsigned char lead = byte(0);
+  if (lead < 0x80) return 1;
+  std::size_t n = 0;
+  unsigned char low = 0x80, high = 0xbf;  // allowed range of the second byte
+  if (lead >= 0xc2 && lead <= 0xdf) n = 2;
+  else if (lead >= 0xe0 && lead <= 0xef) {
+    n = 3;
+    if (lead == 0xe0) low = 0xa0;
+    if (lead == 0xed) high = 0x9f;
+  } else if (lead >= 0xf0 && lead <= 0xf4) {
+    n = 4;
+    if (lead == 0xf0) low = 0x90;
+    if (lead == 0xf4) high = 0x8f;
+  } else {
+    return 0;
+  }
+  if (text.size() < n || byte(1) < low || byte(1) > high) return 0;
+  for (std::size_t i = 2; i < n; ++i)
+    if (byte(i) < 0x80 || byte(i) > 0xbf) return 0;
+  return n;
+}
+
+}  // namespace
+
+}  // namespace demfem::study::detail
+
+namespace demfem::study {
+
+std::string validUtf8(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  while (!text.empty()) {
+    const std::size_t n = detail::utf8SequenceLength(text);
+    if (n == 0) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02X", static_cast<unsigned char>(text[0]));
+      out += escaped;
+      text.remove_prefix(1);
+    } else {
+      out += text.substr(0, n);
+      text.remove_prefix(n);
+    }
+  }
+  return out;
+}
+
+}  // namespace demfem::study
+
+namespace demfem::study::detail {
+
+std::string utf8Prefix(std::string_view text, std::size_t bytes) {
+  std::size_t end = 0;
+  while (end < text.size()) {
+    const std::size_t n = std::max<std::size_t>(1, utf8SequenceLength(text.substr(end)));
+    if (end + n > bytes) break;
+    end += n;
+  }
+  return std::string(text.substr(0, end));
+}
+
 std::string pointerToken(std::string_view key) {
   std::string out;
   for (char c : key) {
@@ -122,7 +188,7 @@ std::string pointerToken(std::string_view key) {
 std::string describeValue(const nlohmann::json& value) {
   if (value.is_string()) {
     std::string text = value.get<std::string>();
-    if (text.size() > 40) text = text.substr(0, 37) + "...";
+    if (text.size() > 40) text = utf8Prefix(text, 37) + "...";
     return "string \"" + text + "\"";
   }
   if (value.is_number()) return "number " + formatNumber(value.get<double>());
@@ -208,24 +274,21 @@ std::optional<double> ObjectReader::quantity(std::string_view key, Limits limits
   return *x * factor;
 }
 
-std::optional<long long> ObjectReader::integer(std::string_view key, long long minimum, Need need) {
-  const std::string expected = "an integer >= " + std::to_string(minimum);
+std::optional<long long> ObjectReader::integer(std::string_view key, long long minimum, long long maximum, Need need) {
+  const std::string expected = "an integer >= " + std::to_string(minimum) + " and <= " + std::to_string(maximum);
   const nlohmann::json* v = member(key, need, expected.c_str());
   if (!v) return std::nullopt;
   if (!v->is_number_integer()) {
     wrongType(key, *v, expected.c_str());
     return std::nullopt;
   }
-  if (v->is_number_unsigned() && v->get<unsigned long long>() > static_cast<unsigned long long>(INT64_MAX)) {
-    issues_.add(pathOf(key), "must be <= " + std::to_string(INT64_MAX) + ", got " + v->dump());
+  const bool above = v->is_number_unsigned() ? v->get<unsigned long long>() > static_cast<unsigned long long>(maximum)
+                                             : v->get<long long>() > maximum;
+  if (above || v->get<long long>() < minimum) {
+    issues_.add(pathOf(key), "must be " + expected.substr(std::string("an integer ").size()) + ", got " + v->dump());
     return std::nullopt;
   }
-  const long long n = v->get<long long>();
-  if (n < minimum) {
-    issues_.add(pathOf(key), "must be >= " + std::to_string(minimum) + ", got " + std::to_string(n));
-    return std::nullopt;
-  }
-  return n;
+  return v->get<long long>();
 }
 
 std::optional<std::string> ObjectReader::string(std::string_view key, Need need) {

@@ -30,6 +30,9 @@ double siFactorOf(std::string_view key);
 // 2600).
 std::string formatNumber(double value);
 
+// At most `bytes` bytes of `text`, cut at a character boundary (never inside a UTF-8 sequence).
+std::string utf8Prefix(std::string_view text, std::size_t bytes);
+
 // JSON pointer escaping of one reference token (RFC 6901: '~' -> "~0", '/' -> "~1").
 std::string pointerToken(std::string_view key);
 
@@ -74,7 +77,7 @@ class ObjectReader {
   std::optional<double> number(std::string_view key, Limits limits, Need need);
   // The same, converted to SI by the key's unit suffix.
   std::optional<double> quantity(std::string_view key, Limits limits, Need need);
-  std::optional<long long> integer(std::string_view key, long long minimum, Need need);
+  std::optional<long long> integer(std::string_view key, long long minimum, long long maximum, Need need);
   std::optional<std::string> string(std::string_view key, Need need);
   std::optional<bool> boolean(std::string_view key, Need need);
   // One of `choices` (file spelling -> value).

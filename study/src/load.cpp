@@ -34,12 +34,38 @@ using nlohmann::json;
 
 namespace fs = std::filesystem;
 
+// Deepest nesting of objects and arrays a study file may have (the format needs 5).
+constexpr std::size_t kMaxNestingDepth = 64;
+
 // Lengths are compared after the mm -> m conversion; this absorbs representation error only.
 constexpr double kLengthTolerance_m = 1e-12;
+// Physical ranges of the numbers, in file units (docs/study-file.md lists them with the keys).
+constexpr double kMaxLength_mm = 1e5;            // 100 m: any length, depth or distance
+constexpr double kMinDiameter_mm = 1e-3, kMaxDiameter_mm = 1e3;
+constexpr double kMinDensity = 1.0, kMaxDensity = 3e4;  // kg/m^3: aerogel to osmium
+constexpr double kMinModulus_Pa = 1e3, kMaxModulus_Pa = 1e13;  // above diamond
+constexpr double kMaxFriction = 10.0;
+constexpr double kMaxVelocity_mm_s = 1e5;        // 100 m/s
+constexpr double kMinFemStep_s = 1e-9, kMinDemStep_s = 1e-12;
+constexpr double kMaxSimulateLimitS = 3600.0;    // coupling.max_simulate_s: an hour per call
+constexpr long long kMaxThreads = 1024;
+// Sizes the programs are built for; a study beyond them is refused, naming the key that causes it.
+constexpr double kMaxParticles = 5e6;
+constexpr double kMaxKeypoints = 2e5;
+constexpr double kMaxFemSteps = 1e8;
+constexpr double kMaxDemSteps = 1e11;
+constexpr double kRandomClosePacking = 0.64;  // solid fraction used to estimate the particle count
 
 std::string mm(double metres) { return formatNumber(metres * 1e3) + " mm"; }
 
 Need needIf(bool condition) { return condition ? Need::Required : Need::Optional; }
+
+// True if `path` exists and is not a socket (ZeroMQ unlinks an ipc path before binding it).
+bool existsAsNonSocket(const std::string& path) {
+  std::error_code error;
+  const fs::file_status status = fs::symlink_status(path, error);
+  return fs::exists(status) && status.type() != fs::file_type::socket;
+}
 
 bool isPlainName(const std::string& name) {
   return std::all_of(name.begin(), name.end(), [](unsigned char c) {
@@ -127,6 +153,7 @@ class StudyParser {
 
     if (soil) checkSoil();
     checkTools();
+    if (issues_.empty()) checkSizes();
     return study_;
   }
 
@@ -151,16 +178,16 @@ class StudyParser {
     Soil& soil = study_.soil;
     {
       ObjectReader bin = o.object("bin", Need::Required);
-      if (auto v = bin.quantity("length_mm", positive(), Need::Required)) soil.bin_length_m = *v;
-      if (auto v = bin.quantity("width_mm", positive(), Need::Required)) soil.bin_width_m = *v;
+      if (auto v = bin.quantity("length_mm", leftOpen(0.0, kMaxLength_mm), Need::Required)) soil.bin_length_m = *v;
+      if (auto v = bin.quantity("width_mm", leftOpen(0.0, kMaxLength_mm), Need::Required)) soil.bin_width_m = *v;
       if (auto v = bin.string("material", Need::Required)) soil.bin_material = *v;
       bin.finish();
     }
-    if (auto v = o.quantity("fill_height_mm", positive(), Need::Required)) soil.fill_height_m = *v;
+    if (auto v = o.quantity("fill_height_mm", leftOpen(0.0, kMaxLength_mm), Need::Required)) soil.fill_height_m = *v;
     {
       ObjectReader particles = o.object("particles", Need::Required);
-      const auto dmin = particles.quantity("diameter_min_mm", positive(), Need::Required);
-      const auto dmax = particles.quantity("diameter_max_mm", positive(), Need::Required);
+      const auto dmin = particles.quantity("diameter_min_mm", closedInterval(kMinDiameter_mm, kMaxDiameter_mm), Need::Required);
+      const auto dmax = particles.quantity("diameter_max_mm", closedInterval(kMinDiameter_mm, kMaxDiameter_mm), Need::Required);
       if (dmin) soil.diameter_min_m = *dmin;
       if (dmax) soil.diameter_max_m = *dmax;
       if (dmin && dmax && *dmin > *dmax)
@@ -180,8 +207,8 @@ class StudyParser {
         ObjectReader l(&(*layers)[i], "/soil/layers/" + std::to_string(i), issues_);
         Layer layer;
         if (auto v = l.string("material", Need::Required)) layer.material = *v;
-        const auto top = l.quantity("top_depth_mm", nonNegative(), Need::Required);
-        const auto bottom = l.quantity("bottom_depth_mm", positive(), Need::Required);
+        const auto top = l.quantity("top_depth_mm", closedInterval(0.0, kMaxLength_mm), Need::Required);
+        const auto bottom = l.quantity("bottom_depth_mm", leftOpen(0.0, kMaxLength_mm), Need::Required);
         if (top) layer.top_depth_m = *top;
         if (bottom) layer.bottom_depth_m = *bottom;
         layer_ok_.push_back(top && bottom);
@@ -193,8 +220,8 @@ class StudyParser {
       for (std::size_t i = 0; i < interactions->size(); ++i) readInteraction((*interactions)[i], i);
     }
     ObjectReader deposition = o.object("deposition", Need::Optional);
-    if (auto v = deposition.integer("seed", 0, Need::Optional)) soil.deposition_seed = static_cast<std::uint64_t>(*v);
-    if (auto v = deposition.quantity("settle_kinetic_energy_J", positive(), Need::Optional))
+    if (auto v = deposition.integer("seed", 0, INT64_MAX, Need::Optional)) soil.deposition_seed = static_cast<std::uint64_t>(*v);
+    if (auto v = deposition.quantity("settle_kinetic_energy_J", leftOpen(0.0, 1e6), Need::Optional))
       soil.settle_kinetic_energy_J = *v;
     if (auto v = deposition.choice("backend", detail::kDepositionBackends, Need::Optional)) soil.deposition_backend = *v;
     deposition.finish();
@@ -212,10 +239,10 @@ class StudyParser {
         issues_.add(path + "/name", "\"" + *v + "\" is already defined at /soil/materials/" +
                                         std::to_string(material_path_index_[it->second]));
     }
-    if (auto v = m.quantity("density_kg_m3", positive(), Need::Required)) material.density_kg_m3 = *v;
-    if (auto v = m.quantity("E_Pa", positive(), Need::Required)) material.youngs_Pa = *v;
+    if (auto v = m.quantity("density_kg_m3", closedInterval(kMinDensity, kMaxDensity), Need::Required)) material.density_kg_m3 = *v;
+    if (auto v = m.quantity("E_Pa", closedInterval(kMinModulus_Pa, kMaxModulus_Pa), Need::Required)) material.youngs_Pa = *v;
     if (auto v = m.quantity("nu", openInterval(-1.0, 0.5), Need::Required)) material.poisson = *v;
-    if (auto v = m.quantity("yield_Pa", nonNegative(), Need::Required)) material.yield_Pa = *v;
+    if (auto v = m.quantity("yield_Pa", closedInterval(0.0, kMaxModulus_Pa), Need::Required)) material.yield_Pa = *v;
     m.finish();
     material_path_index_.push_back(i);
     study_.soil.materials.push_back(material);
@@ -243,15 +270,15 @@ class StudyParser {
     const bool edem = normal_ == NormalModel::EdemHysteretic;
     const bool hooke = normal_ == NormalModel::Hooke || normal_ == NormalModel::HookeHysteresis;
     const bool hysteresis = normal_ == NormalModel::HookeHysteresis;
-    param("stiffness_factor", positive(), edem, "\"edem-hysteretic\"", model.stiffness_factor);
-    param("damping_factor", nonNegative(), edem, "\"edem-hysteretic\"", model.damping_factor);
-    param("characteristic_velocity_m_s", positive(), hooke, "\"hooke\" and \"hooke-hysteresis\"",
+    param("stiffness_factor", leftOpen(0.0, 100.0), edem, "\"edem-hysteretic\"", model.stiffness_factor);
+    param("damping_factor", closedInterval(0.0, 100.0), edem, "\"edem-hysteretic\"", model.damping_factor);
+    param("characteristic_velocity_m_s", leftOpen(0.0, 1e4), hooke, "\"hooke\" and \"hooke-hysteresis\"",
           model.characteristic_velocity_m_s);
-    param("coefficient_max_elastic_stiffness", detail::Limits{1.0, std::nullopt, true, false}, hysteresis,
+    param("coefficient_max_elastic_stiffness", leftOpen(1.0, 1e3), hysteresis,
           "\"hooke-hysteresis\"", model.coefficient_max_elastic_stiffness);
-    param("coefficient_plasticity_depth", positive(), hysteresis, "\"hooke-hysteresis\"",
+    param("coefficient_plasticity_depth", leftOpen(0.0, 100.0), hysteresis, "\"hooke-hysteresis\"",
           model.coefficient_plasticity_depth);
-    param("coefficient_adhesion_stiffness", nonNegative(), hysteresis, "\"hooke-hysteresis\"",
+    param("coefficient_adhesion_stiffness", closedInterval(0.0, 1e3), hysteresis, "\"hooke-hysteresis\"",
           model.coefficient_adhesion_stiffness);
     c.finish();
   }
@@ -270,14 +297,14 @@ class StudyParser {
       }
     }
     if (auto v = r.quantity("restitution", leftOpen(0.0, 1.0), Need::Required)) entry.restitution = *v;
-    if (auto v = r.quantity("static_friction", nonNegative(), Need::Required)) entry.static_friction = *v;
+    if (auto v = r.quantity("static_friction", closedInterval(0.0, kMaxFriction), Need::Required)) entry.static_friction = *v;
     if (rolling_ == RollingModel::None)
       r.forbid("rolling_friction", "soil.contact.rolling is \"none\"");
-    else if (auto v = r.quantity("rolling_friction", nonNegative(), needIf(rolling_.has_value())))
+    else if (auto v = r.quantity("rolling_friction", closedInterval(0.0, kMaxFriction), needIf(rolling_.has_value())))
       entry.rolling_friction = *v;
     if (cohesion_ == CohesionModel::None)
       r.forbid("cohesion_J_m3", "soil.contact.cohesion is \"none\"");
-    else if (auto v = r.quantity("cohesion_J_m3", nonNegative(), needIf(cohesion_.has_value())))
+    else if (auto v = r.quantity("cohesion_J_m3", closedInterval(0.0, 1e9), needIf(cohesion_.has_value())))
       entry.cohesion_J_m3 = *v;
     r.finish();
     interaction_paths_.push_back(path);
@@ -320,14 +347,14 @@ class StudyParser {
     }
     if (!cone) {
       ObjectReader c = t.object("constraints", Need::Required);
-      const auto clamp = c.quantity("clamp_length_mm", positive(), Need::Required);
-      const auto load_cell = c.quantity("load_cell_from_top_mm", positive(), Need::Required);
-      const auto sensor = c.quantity("sensor_from_top_mm", positive(), Need::Required);
+      const auto clamp = c.quantity("clamp_length_mm", leftOpen(0.0, kMaxLength_mm), Need::Required);
+      const auto load_cell = c.quantity("load_cell_from_top_mm", leftOpen(0.0, kMaxLength_mm), Need::Required);
+      const auto sensor = c.quantity("sensor_from_top_mm", leftOpen(0.0, kMaxLength_mm), Need::Required);
       if (clamp) tool.constraints.clamp_length_m = *clamp;
       if (load_cell) tool.constraints.load_cell_from_top_m = *load_cell;
       if (sensor) tool.constraints.sensor_from_top_m = *sensor;
       tool.constraints.clamp_rotational_stiffness_Nm_per_rad =
-          deformable ? c.quantity("clamp_rotational_stiffness_Nm_per_rad", positive(), Need::Optional) : std::nullopt;
+          deformable ? c.quantity("clamp_rotational_stiffness_Nm_per_rad", leftOpen(0.0, 1e9), Need::Optional) : std::nullopt;
       if (!deformable) c.forbid("clamp_rotational_stiffness_Nm_per_rad", "the tool is rigid (no FEM model to hold)");
       source.constraints_ok = clamp && load_cell && sensor && geometry_lengths_ok;
       c.finish();
@@ -336,20 +363,20 @@ class StudyParser {
     }
     if (deformable) {
       ObjectReader s = t.object("sensors", Need::Optional);
-      if (auto v = s.quantity("force_gain", positive(), Need::Optional)) tool.sensors.force_gain = *v;
-      if (auto v = s.quantity("deformation_gain", positive(), Need::Optional)) tool.sensors.deformation_gain = *v;
+      if (auto v = s.quantity("force_gain", leftOpen(0.0, 100.0), Need::Optional)) tool.sensors.force_gain = *v;
+      if (auto v = s.quantity("deformation_gain", leftOpen(0.0, 100.0), Need::Optional)) tool.sensors.deformation_gain = *v;
       s.finish();
     } else {
       t.forbid("sensors", "sensor gains apply to the FEM tool's load cell and deformation sensor");
     }
     if (soil) {
       ObjectReader m = t.object("motion", Need::Required);
-      const auto depth = m.quantity("depth_mm", positive(), Need::Required);
+      const auto depth = m.quantity("depth_mm", leftOpen(0.0, kMaxLength_mm), Need::Required);
       if (depth) tool.motion.depth_m = *depth;
-      if (auto v = m.quantity("velocity_mm_s", positive(), Need::Required)) tool.motion.velocity_m_s = *v;
-      const auto start_z = m.quantity("start_z_mm", {}, Need::Required);
+      if (auto v = m.quantity("velocity_mm_s", leftOpen(0.0, kMaxVelocity_mm_s), Need::Required)) tool.motion.velocity_m_s = *v;
+      const auto start_z = m.quantity("start_z_mm", closedInterval(-kMaxLength_mm, kMaxLength_mm), Need::Required);
       if (start_z) tool.motion.start_z_m = *start_z;
-      const auto center_x = m.quantity("center_x_mm", {}, Need::Optional);
+      const auto center_x = m.quantity("center_x_mm", closedInterval(-kMaxLength_mm, kMaxLength_mm), Need::Optional);
       if (center_x) tool.motion.center_x_m = *center_x;
       center_x_given_.push_back(m.has("center_x_mm"));
       bool stroke_ok = true;
@@ -358,10 +385,10 @@ class StudyParser {
         m.forbid("stroke_mm", why);
         m.forbid("insertion_velocity_mm_s", why);
       } else {
-        const auto stroke = m.quantity("stroke_mm", positive(), Need::Required);
+        const auto stroke = m.quantity("stroke_mm", leftOpen(0.0, kMaxLength_mm), Need::Required);
         if (stroke) tool.motion.stroke_m = *stroke;
         stroke_ok = stroke.has_value();
-        if (auto v = m.quantity("insertion_velocity_mm_s", positive(), Need::Required))
+        if (auto v = m.quantity("insertion_velocity_mm_s", leftOpen(0.0, kMaxVelocity_mm_s), Need::Required))
           tool.motion.insertion_velocity_m_s = *v;
       }
       source.motion_ok = depth && start_z && stroke_ok && (center_x || !m.has("center_x_mm")) && geometry_lengths_ok;
@@ -408,24 +435,24 @@ class StudyParser {
       }
       const std::string key = use.key;
       if (key == "length_mm") {
-        if (auto v = g.quantity(key, positive(), Need::Required))
+        if (auto v = g.quantity(key, leftOpen(0.0, kMaxLength_mm), Need::Required))
           geometry.length_m = *v;
         else
           sizes_ok = false;
       } else if (key == "width_mm") {
-        if (auto v = g.quantity(key, positive(), Need::Required))
+        if (auto v = g.quantity(key, leftOpen(0.0, kMaxLength_mm), Need::Required))
           geometry.width_m = *v;
         else
           sizes_ok = false;
       } else if (key == "thickness_mm") {
-        if (auto v = g.quantity(key, positive(), Need::Required))
+        if (auto v = g.quantity(key, leftOpen(0.0, kMaxLength_mm), Need::Required))
           geometry.thickness_m = *v;
         else
           sizes_ok = false;
       } else if (key == "keypoint_spacing_mm") {
-        if (auto v = g.quantity(key, positive(), Need::Optional)) geometry.keypoint_spacing_m = *v;
+        if (auto v = g.quantity(key, leftOpen(0.0, kMaxLength_mm), Need::Optional)) geometry.keypoint_spacing_m = *v;
       } else if (key == "area_mm2") {
-        if (auto v = g.quantity(key, positive(), Need::Required))
+        if (auto v = g.quantity(key, leftOpen(0.0, kMaxLength_mm * kMaxLength_mm), Need::Required))
           geometry.cone_area_m2 = *v;
         else
           sizes_ok = false;
@@ -462,32 +489,32 @@ class StudyParser {
       const std::string why = "the mass and stiffness matrices of a \"matrix-market\" geometry already contain it";
       for (const char* key : {"E_Pa", "nu", "density_kg_m3", "element_order"}) f.forbid(key, why);
     } else {
-      if (auto v = f.quantity("E_Pa", positive(), Need::Required)) fem.youngs_Pa = *v;
+      if (auto v = f.quantity("E_Pa", closedInterval(kMinModulus_Pa, kMaxModulus_Pa), Need::Required)) fem.youngs_Pa = *v;
       if (auto v = f.quantity("nu", openInterval(-1.0, 0.5), Need::Required)) fem.poisson = *v;
-      if (auto v = f.quantity("density_kg_m3", positive(), Need::Required)) fem.density_kg_m3 = *v;
+      if (auto v = f.quantity("density_kg_m3", closedInterval(kMinDensity, kMaxDensity), Need::Required)) fem.density_kg_m3 = *v;
       if (auto v = f.choice("element_order", detail::kElementOrders, Need::Optional)) fem.element_order = *v;
     }
     if (!dynamic) {
       const std::string why = "a rigid tool is not integrated in time (its FEM model gives the load cell's static split)";
       for (const char* key : {"alpha_s", "beta_per_s"}) f.forbid(key, why);
     } else {
-      if (auto v = f.quantity("alpha_s", nonNegative(), Need::Required)) fem.alpha_s = *v;  // Eq (4)
-      if (auto v = f.quantity("beta_per_s", nonNegative(), Need::Required)) fem.beta_per_s = *v;
+      if (auto v = f.quantity("alpha_s", closedInterval(0.0, 1.0), Need::Required)) fem.alpha_s = *v;  // Eq (4)
+      if (auto v = f.quantity("beta_per_s", closedInterval(0.0, 1e6), Need::Required)) fem.beta_per_s = *v;
     }
     f.finish();
   }
 
   void readWeightDrop(ObjectReader& w) {
     WeightDrop drop;
-    if (auto v = w.quantity("mass_kg", positive(), Need::Required)) drop.mass_kg = *v;
-    if (auto v = w.quantity("pan_rows_from_tip_mm", positive(), Need::Required)) drop.pan_rows_from_tip_m = *v;
-    if (auto v = w.quantity("duration_s", positive(), Need::Required)) drop.duration_s = *v;
+    if (auto v = w.quantity("mass_kg", leftOpen(0.0, 1e4), Need::Required)) drop.mass_kg = *v;
+    if (auto v = w.quantity("pan_rows_from_tip_mm", leftOpen(0.0, kMaxLength_mm), Need::Required)) drop.pan_rows_from_tip_m = *v;
+    if (auto v = w.quantity("duration_s", leftOpen(0.0, 1e5), Need::Required)) drop.duration_s = *v;
     w.finish();
     study_.weight_drop = drop;
   }
 
   void readFemSettings(ObjectReader& f) {
-    if (auto v = f.quantity("dt_s", positive(), Need::Required)) study_.fem.dt_s = *v;
+    if (auto v = f.quantity("dt_s", closedInterval(kMinFemStep_s, 1.0), Need::Required)) study_.fem.dt_s = *v;
     f.finish();
   }
 
@@ -500,7 +527,7 @@ class StudyParser {
         issues_.add(d.pathOf("backend"), "must be a backend name such as \"builtin\" or \"liggghts\", got \"" + *v + "\"");
     }
     if (d.has("dt_s")) {
-      if (auto v = d.quantity("dt_s", positive(), Need::Required)) dem.dt_s = *v;
+      if (auto v = d.quantity("dt_s", closedInterval(kMinDemStep_s, 1e-2), Need::Required)) dem.dt_s = *v;
       d.forbid("criterion", "dem.dt_s sets the time step explicitly");
       d.forbid("dt_fraction", "dem.dt_s sets the time step explicitly");
     } else {
@@ -510,21 +537,31 @@ class StudyParser {
     }
     // Default: every core of this machine (results are reproducible per thread count).
     dem.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    if (auto v = d.integer("threads", 1, Need::Optional)) dem.threads = static_cast<int>(*v);
-    if (auto v = d.integer("seed", 0, Need::Optional)) dem.seed = static_cast<std::uint64_t>(*v);
+    if (auto v = d.integer("threads", 1, kMaxThreads, Need::Optional)) dem.threads = static_cast<int>(*v);
+    if (auto v = d.integer("seed", 0, INT64_MAX, Need::Optional)) dem.seed = static_cast<std::uint64_t>(*v);
     d.finish();
   }
 
   void readCoupling(ObjectReader& c) {
     CouplingSettings& coupling = study_.coupling;
     if (auto v = c.string("endpoint", Need::Optional)) {
-      if (v->starts_with("inproc://") || v->starts_with("ipc://") || v->starts_with("tcp://"))
+      if (v->starts_with("ipc://") && existsAsNonSocket(v->substr(6)))
+        issues_.add(c.pathOf("endpoint"), "the ipc path " + v->substr(6) +
+                                              " exists and is not a socket: binding would delete it; name a path "
+                                              "that does not exist (or leave the endpoint to demfem run)");
+      else if (v->starts_with("inproc://") || v->starts_with("ipc://") || v->starts_with("tcp://"))
         coupling.endpoint = *v;
       else
         issues_.add(c.pathOf("endpoint"), "must start with inproc://, ipc:// or tcp://, got \"" + *v + "\"");
     }
     if (auto v = c.choice("force_averaging", detail::kForceAveraging, Need::Optional)) coupling.force_averaging = *v;
-    if (auto v = c.quantity("timeout_s", positive(), Need::Optional)) coupling.timeout_s = *v;
+    if (auto v = c.quantity("timeout_s", leftOpen(0.0, 86400.0), Need::Optional)) coupling.timeout_s = *v;
+    if (auto v = c.quantity("max_simulate_s", leftOpen(0.0, kMaxSimulateLimitS), Need::Optional)) {
+      coupling.max_simulate_s = *v;
+      if (*v < study_.fem.dt_s)
+        issues_.add(c.pathOf("max_simulate_s"), "must be >= fem.dt_s (" + formatNumber(study_.fem.dt_s) +
+                                                    " s, the interval the FEM client asks for), got " + formatNumber(*v));
+    }
     c.finish();
   }
 
@@ -532,8 +569,8 @@ class StudyParser {
     OutputSettings& output = study_.output;
     output.directory = fs::path("out") / study_.name;
     if (auto v = o.string("directory", Need::Optional)) output.directory = *v;
-    if (auto v = o.integer("vtk_every", 0, Need::Optional)) output.vtk_every = static_cast<int>(*v);
-    if (auto v = o.integer("csv_every", 1, Need::Optional)) output.csv_every = static_cast<int>(*v);
+    if (auto v = o.integer("vtk_every", 0, INT32_MAX, Need::Optional)) output.vtk_every = static_cast<int>(*v);
+    if (auto v = o.integer("csv_every", 1, INT32_MAX, Need::Optional)) output.csv_every = static_cast<int>(*v);
     o.finish();
   }
 
@@ -759,6 +796,50 @@ class StudyParser {
                                                  formatNumber(study_.weight_drop->duration_s));
   }
 
+  // Sizes beyond what the programs are built for (kMaxParticles, ...), estimated from the same
+  // quantities the programs derive them from; judged on an otherwise valid study only.
+  void checkSizes() {
+    const Soil& soil = study_.soil;
+    const bool has_soil = hasSoil(study_.kind);
+    if (has_soil) {
+      const double d = 0.5 * (soil.diameter_min_m + soil.diameter_max_m);
+      const double particles = kRandomClosePacking * soil.bin_length_m * soil.bin_width_m * soil.fill_height_m /
+                               (std::numbers::pi / 6 * d * d * d);
+      if (particles > kMaxParticles)
+        issues_.add("/soil/particles/diameter_min_mm", "the bin would hold about " + formatNumber(std::round(particles)) +
+                                                           " particles of this size, more than the limit of " +
+                                                           formatNumber(kMaxParticles) + ": larger particles or a smaller bin");
+    }
+    double simulated_s = study_.weight_drop ? study_.weight_drop->duration_s : 0.0;
+    for (std::size_t i = 0; i < study_.tools.size(); ++i) {
+      const Tool& tool = study_.tools[i];
+      const ToolGeometry& g = tool.geometry;
+      const double spacing = g.keypoint_spacing_m;
+      double area = 0;  // surface carrying keypoints; meshes from files bring their own
+      if (g.kind == GeometryKind::Plate)
+        area = 2 * (g.length_m * g.width_m + g.length_m * g.thickness_m + g.width_m * g.thickness_m);
+      if (g.kind == GeometryKind::Cone) area = g.cone_area_m2 * (1 + 1 / std::sin(g.cone_angle_rad / 2));
+      if (area / (spacing * spacing) > kMaxKeypoints)
+        issues_.add(tool_sources_[i].path + "/geometry/keypoint_spacing_mm",
+                    "gives about " + formatNumber(std::round(area / (spacing * spacing))) +
+                        " keypoints, more than the limit of " + formatNumber(kMaxKeypoints) + ": a coarser spacing");
+      if (!has_soil) continue;
+      // Insertion from one particle diameter above the surface, then the stroke (fem/coupled_driver.hpp).
+      const ToolMotion& m = tool.motion;
+      const double drop = soil.diameter_max_m + m.depth_m;
+      simulated_s = std::max(simulated_s, g.kind == GeometryKind::Cone
+                                              ? drop / m.velocity_m_s
+                                              : drop / m.insertion_velocity_m_s + m.stroke_m / m.velocity_m_s);
+    }
+    if (simulated_s / study_.fem.dt_s > kMaxFemSteps)
+      issues_.add("/fem/dt_s", "gives " + formatNumber(std::round(simulated_s / study_.fem.dt_s)) + " FEM steps over the " +
+                                   formatNumber(simulated_s) + " s the study simulates, more than the limit of " +
+                                   formatNumber(kMaxFemSteps));
+    if (has_soil && study_.dem.dt_s && simulated_s / *study_.dem.dt_s > kMaxDemSteps)
+      issues_.add("/dem/dt_s", "gives " + formatNumber(std::round(simulated_s / *study_.dem.dt_s)) +
+                                   " DEM steps, more than the limit of " + formatNumber(kMaxDemSteps));
+  }
+
   Study study_;
   fs::path base_dir_;
   IssueList& issues_;
@@ -788,61 +869,103 @@ std::pair<std::size_t, std::size_t> lineColumn(const std::string& text, std::siz
   return {line, column};
 }
 
-// Parses JSON text, recording duplicate keys (nlohmann keeps the last one silently).
-std::optional<json> parseJson(const std::string& text, IssueList& issues) {
-  struct Frame {
-    bool object;
-    std::string path;
-    std::set<std::string> keys;
-    std::string key;
-    std::size_t count = 0;
-  };
-  std::vector<Frame> stack;
-  const auto childPath = [&]() -> std::string {
-    if (stack.empty()) return "";
-    const Frame& parent = stack.back();
-    return parent.path + "/" + (parent.object ? detail::pointerToken(parent.key) : std::to_string(parent.count));
-  };
-  const auto finishedValue = [&]() {
-    if (!stack.empty() && !stack.back().object) ++stack.back().count;
-  };
-  json::parser_callback_t track = [&](int, json::parse_event_t event, json& parsed) {
-    switch (event) {
-      case json::parse_event_t::object_start:
-      case json::parse_event_t::array_start: {
-        std::string path = childPath();
-        stack.push_back(Frame{event == json::parse_event_t::object_start, std::move(path), {}, {}, 0});
-        break;
-      }
-      case json::parse_event_t::object_end:
-      case json::parse_event_t::array_end:
-        stack.pop_back();
-        finishedValue();
-        break;
-      case json::parse_event_t::key: {
-        Frame& frame = stack.back();
-        frame.key = parsed.get<std::string>();
-        if (!frame.keys.insert(frame.key).second)
-          issues.add(frame.path + "/" + detail::pointerToken(frame.key),
-                     "duplicate key (JSON keeps only the last value)");
-        break;
-      }
-      case json::parse_event_t::value:
-        finishedValue();
-        break;
-    }
+// Builds the document from nlohmann's SAX events, so that every problem of the text itself gets a
+// line, a column and the JSON path where it happened: duplicate keys (nlohmann would keep the last
+// one silently), nesting deeper than kMaxNestingDepth (refused before it costs memory), numbers
+// outside the double range (1e400) and syntax or UTF-8 errors.
+class DocumentBuilder final : public json::json_sax_t {
+ public:
+  DocumentBuilder(const std::string& text, IssueList& issues) : text_(text), issues_(issues) {}
+
+  json root;
+
+  bool null() override { return add(nullptr); }
+  bool boolean(bool v) override { return add(v); }
+  bool number_integer(number_integer_t v) override { return add(v); }
+  bool number_unsigned(number_unsigned_t v) override { return add(v); }
+  bool number_float(number_float_t v, const string_t&) override { return add(v); }
+  bool string(string_t& v) override { return add(std::move(v)); }
+  bool binary(binary_t&) override { return false; }  // never produced by text JSON
+  bool start_object(std::size_t) override { return open(json::object()); }
+  bool start_array(std::size_t) override { return open(json::array()); }
+  bool end_object() override { return close(); }
+  bool end_array() override { return close(); }
+  bool key(string_t& key) override {
+    Frame& frame = stack_.back();
+    if (frame.value->contains(key))
+      issues_.add(frame.path + "/" + detail::pointerToken(key), "duplicate key (JSON keeps only the last value)");
+    frame.key = key;
     return true;
-  };
-  try {
-    return json::parse(text, track);
-  } catch (const json::parse_error& e) {
-    const auto [line, column] = lineColumn(text, e.byte);
-    std::string reason = e.what();
-    const std::size_t colon = reason.find(": ", reason.find("column"));
-    if (colon != std::string::npos) reason = reason.substr(colon + 2);
-    issues.add("", "line " + std::to_string(line) + ", column " + std::to_string(column) + ": " + reason);
-    return std::nullopt;
   }
+  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& error) override {
+    const auto [line, column] = lineColumn(text_, position);
+    std::string reason = error.what();
+    // "[json.exception.parse_error.101] parse error at line 3, column 11: syntax error ..." -> "syntax error ..."
+    if (const std::size_t bracket = reason.find("] "); bracket != std::string::npos) reason = reason.substr(bracket + 2);
+    if (const std::size_t column_text = reason.find(", column "); reason.rfind("parse error", 0) == 0 &&
+                                                                    column_text != std::string::npos)
+      reason = reason.substr(reason.find(": ", column_text) + 2);
+    if (error.id == 406) reason += " (outside the range of a double)";
+    issues_.add(childPath(), "line " + std::to_string(line) + ", column " + std::to_string(column) + ": " + reason);
+    return false;
+  }
+
+ private:
+  struct Frame {
+    json* value;
+    std::string path;
+    std::string key;
+  };
+
+  std::string childPath() const {
+    if (stack_.empty()) return "";
+    const Frame& parent = stack_.back();
+    return parent.path + "/" +
+           (parent.value->is_object() ? detail::pointerToken(parent.key) : std::to_string(parent.value->size()));
+  }
+  // Places `value` where the parser is (root, the current key, or the end of the current array).
+  json* place(json value) {
+    if (stack_.empty()) {
+      root = std::move(value);
+      return &root;
+    }
+    Frame& parent = stack_.back();
+    if (parent.value->is_object()) {
+      json& slot = (*parent.value)[parent.key];
+      slot = std::move(value);
+      return &slot;
+    }
+    parent.value->push_back(std::move(value));
+    return &parent.value->back();
+  }
+  bool add(json value) {
+    place(std::move(value));
+    return true;
+  }
+  bool open(json container) {
+    std::string path = childPath();
+    if (stack_.size() >= kMaxNestingDepth) {
+      issues_.add(path, "nested deeper than " + std::to_string(kMaxNestingDepth) + " objects and arrays");
+      return false;
+    }
+    json* value = place(std::move(container));
+    stack_.push_back({value, std::move(path), {}});
+    return true;
+  }
+  bool close() {
+    stack_.pop_back();
+    return true;
+  }
+
+  const std::string& text_;
+  IssueList& issues_;
+  std::vector<Frame> stack_;
+};
+
+std::optional<json> parseJson(const std::string& text, IssueList& issues) {
+  DocumentBuilder builder(text, issues);
+  if (!json::sax_parse(text, &builder)) return std::nullopt;
+  return std::move(builder.root);
 }
 
 }  // namespace

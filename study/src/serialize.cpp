@@ -227,6 +227,7 @@ ordered_json toJson(const Study& study) {
     if (!study.coupling.endpoint.empty()) c["endpoint"] = study.coupling.endpoint;
     c["force_averaging"] = nameOf(detail::kForceAveraging, study.coupling.force_averaging);
     put(c, "timeout_s", study.coupling.timeout_s);
+    put(c, "max_simulate_s", study.coupling.max_simulate_s);
   }
   ordered_json& o = out["output"];
   o["directory"] = study.output.directory.string();

@@ -19,8 +19,21 @@ std::string formatIssues(const std::string& file, const std::vector<Issue>& issu
 }
 }  // namespace
 
+namespace {
+// File names and messages may quote bytes of a broken file: keep them printable and JSON-safe.
+std::vector<Issue> printable(std::vector<Issue> issues) {  // by value: sanitises a copy
+  for (Issue& issue : issues) {
+    issue.path = validUtf8(issue.path);
+    issue.message = validUtf8(issue.message);
+  }
+  return issues;
+}
+}  // namespace
+
 StudyError::StudyError(std::string file, std::vector<Issue> issues)
-    : std::runtime_error(formatIssues(file, issues)), file_(std::move(file)), issues_(std::move(issues)) {}
+    : std::runtime_error(formatIssues(validUtf8(file), printable(issues))),
+      file_(validUtf8(file)),
+      issues_(printable(std::move(issues))) {}
 
 const DemMaterial& Study::material(const std::string& name) const {
   for (const DemMaterial& m : soil.materials)

@@ -14,13 +14,19 @@ namespace {
 
 std::unique_ptr<CouplingApi> harmonic() { return makeTestBackend("harmonic", {demfem::study::Tool{}}, TestLoad{}); }
 
+ServerOptions idle(std::chrono::milliseconds timeout) {
+  ServerOptions options;
+  options.idle_timeout = timeout;
+  return options;
+}
+
 // A server on its own thread until shutdown or 10 s idle.
 struct ServedBackend {
   explicit ServedBackend(zmq::context_t& context, const std::string& endpoint)
-      : api(harmonic()), socket(context, endpoint), server(*api) {
+      : api(harmonic()), socket(context, endpoint), server(*api, idle(10s)) {
     thread = std::thread([this] {
       try {
-        server.serve(socket, {10s, 10s});
+        server.serve(socket, 10s);
       } catch (const CouplingError&) {
       }
     });
@@ -95,8 +101,8 @@ TEST_CASE("the remote proxy refuses a server of another protocol version", "[ada
   std::thread server([&] {
     auto request = socket.receive(5s);
     if (!request) return;
-    const auto r = p::decodeRequest(*request);
-    socket.send(p::encode(p::Reply{r.seq, "hello", p::HelloReply{2, "future", "9", 1e-5}}));
+    const auto r = p::decodeRequest(request->message);
+    socket.send(request->from, p::encode(p::Reply{r.seq, "hello", p::HelloReply{2, "future", "9", 1e-5}}));
   });
   try {
     RemoteProxy proxy({"inproc://future-server", 5s, std::nullopt, "test"}, &context);
@@ -123,7 +129,41 @@ TEST_CASE("a served backend whose client vanished gives up after the idle timeou
   zmq::context_t context(1);
   auto api = harmonic();
   p::ServerSocket socket(context, "inproc://abandoned");
-  Server server(*api);
-  CHECK_THROWS_WITH(server.serve(socket, {100ms, 100ms}), Catch::Contains("no request"));
+  Server server(*api, idle(100ms));
+  CHECK_THROWS_WITH(server.serve(socket, 100ms), Catch::Contains("no request"));
   CHECK_THROWS_AS(api->time(), CouplingError);  // backend was shut down
+}
+
+TEST_CASE("a second client is told the server is busy, the first keeps its session, and a crashed client can come back",
+          "[adapter]") {
+  zmq::context_t context(1);
+  auto api = harmonic();
+  p::ServerSocket socket(context, "tcp://127.0.0.1:*");
+  Server server(*api, idle(300ms));
+  std::thread thread([&] {
+    try {
+      server.serve(socket, 10s);
+    } catch (const CouplingError&) {
+    }
+  });
+  {
+    RemoteProxy first({socket.endpoint(), 5s, std::nullopt, "first"}, &context);
+    first.simulate(1e-3);
+    try {
+      RemoteProxy second({socket.endpoint(), 5s, std::nullopt, "second"}, &context);
+      FAIL("a second client got a session");
+    } catch (const CouplingError& e) {
+      CHECK(e.code() == ErrorCode::Busy);
+    }
+    first.simulate(1e-3);  // undisturbed
+    CHECK(first.time() == Approx(2e-3).epsilon(1e-12));
+    // `first` now vanishes without shutting down, as a crashed client does.
+  }
+  std::this_thread::sleep_for(400ms);
+  RemoteProxy again({socket.endpoint(), 5s, std::nullopt, "restarted"}, &context);
+  CHECK(again.time() == Approx(2e-3).epsilon(1e-12));
+  CHECK_THROWS_WITH(again.checkpoint("/tmp/x.ckpt"), Catch::Contains("named, not located"));
+  again.shutdown();
+  thread.join();
+  CHECK(server.shutdownDone());
 }

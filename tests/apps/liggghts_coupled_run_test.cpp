@@ -140,8 +140,10 @@ TEST_CASE("a coupled run of demfem-fem against demfem-dem on LIGGGHTS completes 
       zmq::context_t context(1);
       protocol::ServerSocket socket(context, "tcp://127.0.0.1:*");
       relay_endpoint.set_value(socket.endpoint());
-      adapter::Server server(*relay);
-      server.serve(socket, {60s, 60s});
+      adapter::ServerOptions options;
+      options.idle_timeout = 60s;
+      adapter::Server server(*relay, options);
+      server.serve(socket, 60s);
     } catch (const std::exception& e) {
       relay_error = e.what();
       try {

@@ -6,8 +6,53 @@
 #include <catch2/catch.hpp>
 
 #include <cstdlib>
+#include <algorithm>
 
 using namespace demfem::testing;
+
+namespace {
+
+// The run directory (under the temp directory) whose owner file names `pid`; empty if none.
+fs::path runDirectoryOf(pid_t pid) {
+  for (const auto& entry : fs::directory_iterator(fs::temp_directory_path())) {
+    if (entry.path().filename().string().rfind("demfem-run-", 0) != 0) continue;
+    long owner = 0;
+    std::ifstream(entry.path() / "demfem.pid") >> owner;
+    if (owner == pid) return entry.path();
+  }
+  return {};
+}
+
+// Children of `pid` (from /proc).
+std::vector<pid_t> childrenOf(pid_t pid) {
+  std::vector<pid_t> children;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string line;
+    std::getline(stat, line);
+    const auto close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(line.substr(close + 2));
+    char state = 0;
+    long ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == pid) children.push_back(static_cast<pid_t>(std::stol(name)));
+  }
+  return children;
+}
+
+// Gone or a zombie (a container's init may not reap orphans).
+bool dead(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return true;
+  const auto close = line.rfind(')');
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] == 'Z';
+}
+
+}  // namespace
 
 TEST_CASE("demfem run starts both processes over ipc and marks a run cut by --steps incomplete", "[apps]") {
   const fs::path dir = freshDir("local-run");
@@ -49,7 +94,40 @@ TEST_CASE("Ctrl-C on demfem run stops both processes and marks the outputs incom
   CHECK(readText(dir / "out" / "sensors.csv").find("\n# incomplete: ") != std::string::npos);
   CHECK(nlohmann::json::parse(readText(dir / "out" / "sensors.json"))["complete"] == false);
   // Its temporary directory (the ipc socket) is gone too, although the signal skipped destructors.
-  CHECK_FALSE(fs::exists(fs::temp_directory_path() / ("demfem-run-" + std::to_string(run.pid()))));
+  CHECK(runDirectoryOf(run.pid()).empty());
+  fs::remove_all(dir);
+}
+
+TEST_CASE("SIGKILL on demfem run takes both children down, and the next run removes its directory", "[apps]") {
+  const fs::path dir = freshDir("local-run-kill");
+  const fs::path study = fastQuickStudy(dir);
+  Process run({app("demfem"), "run", study.string(), "--backend", "harmonic", "--output", (dir / "out").string(), "--quiet"},
+              dir / "demfem");
+  const fs::path partial = dir / "out" / "sensors.csv.partial";
+  const auto deadline = std::chrono::steady_clock::now() + 120s;
+  while (!(fs::exists(partial) && fs::file_size(partial) > 1000) && !run.exited() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(10ms);
+  REQUIRE_FALSE(run.exited());
+  const fs::path work = runDirectoryOf(run.pid());
+  REQUIRE_FALSE(work.empty());
+  CHECK((fs::status(work).permissions() & (fs::perms::group_all | fs::perms::others_all)) == fs::perms::none);
+  const std::vector<pid_t> children = childrenOf(run.pid());
+  REQUIRE(children.size() == 2);
+  run.signal(SIGKILL);
+  run.wait(10s);
+  const auto gone_by = std::chrono::steady_clock::now() + 20s;
+  const auto allDead = [&] { return std::all_of(children.begin(), children.end(), dead); };
+  while (!allDead() && std::chrono::steady_clock::now() < gone_by) std::this_thread::sleep_for(20ms);
+  CHECK(allDead());
+  // The FEM client was told (SIGTERM) and marked its outputs incomplete.
+  CHECK(nlohmann::json::parse(readText(dir / "out" / "sensors.json"))["complete"] == false);
+  // Nobody could remove the directory of a SIGKILLed front end; the next run does.
+  CHECK(fs::exists(work));
+  Process next({app("demfem"), "run", study.string(), "--backend", "harmonic", "--steps", "5", "--output",
+                (dir / "next").string(), "--quiet"},
+               dir / "next");
+  CHECK(exitedOk(next.wait(120s)));
+  CHECK_FALSE(fs::exists(work));
   fs::remove_all(dir);
 }
 

@@ -1,6 +1,6 @@
-// libFuzzer target for the protocol decoders (longer runs than the CI fuzz test):
-//   cmake -DCMAKE_CXX_COMPILER=clang++ ... && cmake --build . --target protocol_fuzz_codec
-//   ./tests/protocol/protocol_fuzz_codec -max_total_time=600
+// libFuzzer target for the protocol decoders, built by the sanitizer build (scripts/test.sh,
+// docs/reliability.md) and run there as the ctest test fuzz:protocol_fuzz_codec; longer runs:
+//   build-sanitize/tests/protocol/protocol_fuzz_codec -max_total_time=600 CORPUS_DIR
 // Input bytes are split into frames by fuzz::framesFromBytes(). Only ProtocolError may escape the
 // decoders; anything else aborts and libFuzzer reports the input.
 #include "demfem/protocol/codec.hpp"

@@ -27,7 +27,7 @@ void feed(const Multipart& m, Decode decode, Outcome& outcome) {
 
 }  // namespace
 
-TEST_CASE("1e5 random and mutated requests are decoded or rejected, never crash", "[protocol]") {
+TEST_CASE("codec fuzz: 1e5 random and mutated requests are decoded or rejected, never crash", "[protocol]") {
   fuzz::Mutator mutator(20261122);
   std::vector<Multipart> seeds;
   for (const auto& r : samples::requests()) seeds.push_back(encode(r));
@@ -47,7 +47,7 @@ TEST_CASE("1e5 random and mutated requests are decoded or rejected, never crash"
   CHECK(outcome.accepted > 1000);
 }
 
-TEST_CASE("1e5 random and mutated replies are decoded or rejected, never crash", "[protocol]") {
+TEST_CASE("codec fuzz: 1e5 random and mutated replies are decoded or rejected, never crash", "[protocol]") {
   fuzz::Mutator mutator(7);
   std::vector<Multipart> seeds;
   for (const auto& r : samples::replies()) seeds.push_back(encode(r));

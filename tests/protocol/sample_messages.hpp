@@ -25,13 +25,20 @@ inline std::vector<Request> requests() {
       {13, Restore{"run.ckpt"}},
       {14, Shutdown{}},
       {~0ull, GetNodePositions{"unicode \xc3\xa9 name"}},
+      {15, GetTime{}, "0123456789abcdef0123456789abcdef"},
   };
 }
 
 inline std::vector<Reply> replies() {
   return {
-      {1, "hello", HelloReply{kProtocolVersion, "harmonic", "analytic-1", 1e-5, ""}},
-      {1, "hello", HelloReply{kProtocolVersion, "builtin", "0.1", 9e-5, R"({"particles":1455,"settled":true})"}},
+      {1, "hello", HelloReply{kProtocolVersion, "harmonic", "analytic-1", 1e-5}},
+      {1, "hello", HelloReply{kProtocolVersion, "builtin", "0.1", 2.1e-5, "0123456789abcdef0123456789abcdef", 1.0}},
+      {1, "hello", [] {
+         HelloReply r{kProtocolVersion, "builtin", "0.1", 9e-5};
+         r.soil_json = R"({"particles":1455,"settled":true})";
+         return r;
+       }()},
+      {12, "checkpoint", ErrorReply{WireError::Busy, "busy: this server is serving another client"}},
       {2, "list_geometries",
        GeometriesReply{{{"tool", 4, {{0, 1, 2}, {0, 2, 3}}}, {"empty", 0, {}}}}},
       {3, "get_time", TimeReply{0.123456789012345678}},

@@ -20,7 +20,7 @@ std::thread echo(ServerSocket& server, int count, std::chrono::milliseconds wait
     for (int i = 0; i < count; ++i) {
       auto request = server.receive(wait);
       if (!request) return;
-      server.send(*request);
+      server.send(request->from, request->message);
     }
   });
 }
@@ -66,10 +66,62 @@ TEST_CASE("a client whose server never answers times out with a message saying t
   CHECK_THROWS_AS(client.request({"{}"}), ProtocolError);
 }
 
+TEST_CASE("a server that goes away while a request is pending fails it at once, not after the timeout", "[protocol]") {
+  zmq::context_t context(1);
+  auto server = std::make_unique<ServerSocket>(context, "tcp://127.0.0.1:*");
+  ClientSocket client(context, server->endpoint(), 20s);
+  std::thread closer([&] {
+    if (server->receive(5s)) server.reset();  // takes the request, never answers, closes
+  });
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    client.request({"{}"});
+    FAIL("a reply from a closed server");
+  } catch (const ProtocolError& e) {
+    CHECK(e.code() == WireError::PeerGone);
+    CHECK_THAT(e.what(), Catch::Contains("closed the connection"));
+  }
+  CHECK(std::chrono::steady_clock::now() - start < 5s);
+  closer.join();
+}
+
 TEST_CASE("a server receive returns nothing after its timeout", "[protocol]") {
   zmq::context_t context(1);
   ServerSocket server(context, "inproc://idle");
   CHECK_FALSE(server.receive(50ms).has_value());
+}
+
+TEST_CASE("binding ipc never deletes a file that is not a socket", "[protocol]") {
+  const fs::path dir = freshDir("ipc-file");
+  const fs::path precious = dir / "precious.txt";
+  { std::ofstream(precious) << "keep me\n"; }
+  zmq::context_t context(1);
+  CHECK_THROWS_WITH(ServerSocket(context, "ipc://" + precious.string()), Catch::Contains("not a socket"));
+  CHECK(fs::file_size(precious) == 8);
+  {  // a socket left by an earlier server may be replaced
+    ServerSocket first(context, "ipc://" + (dir / "dem.ipc").string());
+  }
+  CHECK(fs::is_socket(dir / "dem.ipc"));
+  CHECK_NOTHROW(ServerSocket(context, "ipc://" + (dir / "dem.ipc").string()));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("each reply goes back to the connection its request came on", "[protocol]") {
+  zmq::context_t context(1);
+  ServerSocket server(context, "inproc://routing");
+  ClientSocket a(context, "inproc://routing", 5s), b(context, "inproc://routing", 5s);
+  std::thread thread([&] {
+    std::vector<Incoming> in;
+    for (int i = 0; i < 2; ++i)
+      if (auto r = server.receive(5s)) in.push_back(*r);
+    if (in.size() != 2) return;
+    CHECK(in[0].from.routing_id != in[1].from.routing_id);
+    for (auto it = in.rbegin(); it != in.rend(); ++it) server.send(it->from, {"to " + it->message[0]});
+  });
+  std::thread other([&] { CHECK(b.request({"b"}) == Multipart{"to b"}); });
+  CHECK(a.request({"a"}) == Multipart{"to a"});
+  other.join();
+  thread.join();
 }
 
 TEST_CASE("binding tcp to a non-loopback address needs CurveZMQ keys", "[protocol]") {

@@ -61,7 +61,7 @@ TEST_CASE("quick study is valid as shipped", "[study]") { CHECK(issuesOf(quick()
 TEST_CASE("a value out of range is reported with its path and the offending value", "[study]") {
   json doc = quick();
   doc["tools"][0]["fem"]["E_Pa"] = -4.06e9;
-  requireSingleIssue(doc, "/tools/0/fem/E_Pa", "must be > 0, got -4.06e9");
+  requireSingleIssue(doc, "/tools/0/fem/E_Pa", "must be >= 1000 and <= 1e13, got -4.06e9");
   doc = quick();
   doc["tools"][0]["fem"]["nu"] = 0.5;  // nu < 0.5: an elastic solid is not incompressible
   requireSingleIssue(doc, "/tools/0/fem/nu", "must be > -1 and < 0.5, got 0.5");
@@ -82,19 +82,19 @@ TEST_CASE("an unknown key is reported and a close misspelling gets a suggestion"
 TEST_CASE("a value of the wrong type is reported with what was expected", "[study]") {
   json doc = quick();
   doc["tools"][0]["motion"]["depth_mm"] = "18";
-  requireSingleIssue(doc, "/tools/0/motion/depth_mm", "must be a number in mm, > 0, got string \"18\"");
+  requireSingleIssue(doc, "/tools/0/motion/depth_mm", "must be a number in mm, > 0 and <= 1e5, got string \"18\"");
   doc = quick();
   doc["dem"]["threads"] = 1.5;
-  requireSingleIssue(doc, "/dem/threads", "must be an integer >= 1, got number 1.5");
+  requireSingleIssue(doc, "/dem/threads", "must be an integer >= 1 and <= 1024, got number 1.5");
 }
 
 TEST_CASE("a missing required key is reported with its expected type and unit", "[study]") {
   json doc = quick();
   doc["soil"]["particles"].erase("diameter_max_mm");
-  requireSingleIssue(doc, "/soil/particles/diameter_max_mm", "missing required key (a number in mm, > 0)");
+  requireSingleIssue(doc, "/soil/particles/diameter_max_mm", "missing required key (a number in mm, >= 0.001 and <= 1000)");
   doc = quick();
   doc["tools"][0]["fem"].erase("alpha_s");  // Rayleigh alpha: physics, no default
-  requireSingleIssue(doc, "/tools/0/fem/alpha_s", "missing required key (a number in s, >= 0)");
+  requireSingleIssue(doc, "/tools/0/fem/alpha_s", "missing required key (a number in s, >= 0 and <= 1)");
 }
 
 TEST_CASE("a bad enumeration string lists the allowed values", "[study]") {
@@ -122,11 +122,11 @@ TEST_CASE("the five-mistakes file yields exactly its five messages with their pa
     CHECK(issues[1].path == "/soil/contact/normal");
     CHECK(issues[2].path == "/soil/particles/diameter_max_mm");
     CHECK(issues[3].path == "/tools/0/fem/E_Pa");
-    CHECK(issues[3].message == "must be > 0, got -4.06e9");
+    CHECK(issues[3].message == "must be >= 1000 and <= 1e13, got -4.06e9");
     CHECK(issues[4].path == "/tools/0/motion/depth_mm");
     // what() is one "FILE: PATH: MESSAGE" line per problem.
     const std::string what = e.what();
-    CHECK(what.find(file.string() + ": /tools/0/fem/E_Pa: must be > 0, got -4.06e9") != std::string::npos);
+    CHECK(what.find(file.string() + ": /tools/0/fem/E_Pa: must be >= 1000 and <= 1e13, got -4.06e9") != std::string::npos);
     CHECK(std::count(what.begin(), what.end(), '\n') == 4);
   }
 }
@@ -151,9 +151,9 @@ TEST_CASE("a JSON syntax error gives line and column", "[study]") {
     FAIL("syntax error accepted");
   } catch (const StudyError& e) {
     REQUIRE(e.issues().size() == 1);
-    CHECK(e.issues()[0].path.empty());
+    CHECK(e.issues()[0].path == "/kind");  // where the parser was
     CHECK(e.issues()[0].message.rfind("line 3, column 11: ", 0) == 0);
-    CHECK(std::string(e.what()).rfind("broken.json: line 3, column 11: ", 0) == 0);
+    CHECK(std::string(e.what()).rfind("broken.json: /kind: line 3, column 11: ", 0) == 0);
   }
 }
 
@@ -360,6 +360,97 @@ TEST_CASE("external meshes and matrices must exist; matrices carry the material"
   for (const Issue& i : matrices) CHECK(i.message.find("already contain") != std::string::npos);
 }
 
+TEST_CASE("a number beyond the double range is reported with line, column and JSON path", "[study]") {
+  const std::string text = R"({"name": "x", "kind": "coupled",
+  "fem": {"dt_s": 1e400}})";
+  try {
+    parseStudy(text, "huge.json");
+    FAIL("1e400 accepted");
+  } catch (const StudyError& e) {
+    REQUIRE(e.issues().size() == 1);
+    CHECK(e.issues()[0].path == "/fem/dt_s");
+    CHECK_THAT(e.issues()[0].message, Catch::StartsWith("line 2, column ") && Catch::Contains("1e400"));
+  }
+}
+
+TEST_CASE("bytes that are not UTF-8 are reported, and every message is valid UTF-8", "[study]") {
+  for (const std::string& bad : {std::string("\xff\xfe"), std::string("\xc3"), std::string("a\xe2\x82")}) {
+    const std::string text = "{\"name\": \"" + bad + "\", \"kind\": \"coupled\"}";
+    try {
+      parseStudy(text, "latin1-\xe9.json");
+      FAIL("invalid UTF-8 accepted");
+    } catch (const StudyError& e) {
+      REQUIRE(e.issues().size() == 1);
+      CHECK(e.issues()[0].path == "/name");
+      CHECK_THAT(e.issues()[0].message, Catch::Contains("UTF-8"));
+      // Dumping the report (what `validate --json` does) must not throw on what the messages quote.
+      CHECK_NOTHROW(json({{"file", e.file()}, {"message", e.issues()[0].message}, {"what", e.what()}}).dump());
+      CHECK_THAT(e.file(), Catch::Contains("\\xE9"));
+    }
+  }
+  // A long string value cut for a message is cut between characters, not inside one.
+  json doc = quick();
+  doc["soil"]["bin"]["length_mm"] = std::string(36, 'a') + "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9";
+  const auto issues = issuesOf(doc);
+  REQUIRE(issues.size() == 1);
+  CHECK_NOTHROW(json(issues[0].message).dump());
+  CHECK_THAT(issues[0].message, Catch::Contains(std::string(36, 'a') + "..."));
+}
+
+TEST_CASE("nesting is capped at 64 levels before it costs memory", "[study]") {
+  const std::size_t depth = 100000;
+  const std::string text = "{\"notes\": " + std::string(depth, '[') + std::string(depth, ']') + "}";
+  try {
+    parseStudy(text, "deep.json");
+    FAIL("deep nesting accepted");
+  } catch (const StudyError& e) {
+    REQUIRE(e.issues().size() == 1);
+    CHECK_THAT(e.issues()[0].message, Catch::Contains("nested deeper than 64"));
+    CHECK(e.issues()[0].path.size() < 200);
+  }
+}
+
+TEST_CASE("numbers outside their physical range are refused at validation, naming the key", "[study]") {
+  json doc = quick();
+  doc["dem"]["threads"] = 1000000000000LL;
+  requireSingleIssue(doc, "/dem/threads", "must be >= 1 and <= 1024, got 1000000000000");
+  doc = quick();
+  doc["soil"]["bin"]["width_mm"] = 1e300;
+  requireSingleIssue(doc, "/soil/bin/width_mm", "must be > 0 and <= 1e5, got 1e300");
+  doc = quick();
+  doc["fem"]["dt_s"] = 1e-300;
+  requireSingleIssue(doc, "/fem/dt_s", "must be >= 1e-9 and <= 1, got 1e-300");
+}
+
+TEST_CASE("a study too large for the programs is refused with the key that makes it so", "[study]") {
+  json doc = quick();
+  doc["soil"]["particles"]["diameter_min_mm"] = 0.01;
+  doc["soil"]["particles"]["diameter_max_mm"] = 0.01;
+  requireSingleIssue(doc, "/soil/particles/diameter_min_mm", "the bin would hold about");
+  doc = quick();
+  doc["tools"][0]["geometry"]["keypoint_spacing_mm"] = 1e-6;
+  requireSingleIssue(doc, "/tools/0/geometry/keypoint_spacing_mm", "gives about");
+  doc = quick();
+  doc["fem"]["dt_s"] = 1e-8;  // in range, but 1e9 FEM steps for the quick study's stroke
+  requireSingleIssue(doc, "/fem/dt_s", "gives");
+  doc = quick();
+  doc["coupling"]["max_simulate_s"] = 1e-6;  // below the FEM step: every simulate call would be refused
+  requireSingleIssue(doc, "/coupling/max_simulate_s", "must be >= fem.dt_s");
+}
+
+TEST_CASE("an ipc endpoint that names an existing file is refused: binding would delete it", "[study]") {
+  const auto file = std::filesystem::temp_directory_path() / "demfem-study-endpoint-test.txt";
+  { std::ofstream(file) << "keep me\n"; }
+  json doc = quick();
+  doc["coupling"]["endpoint"] = "ipc://" + file.string();
+  requireSingleIssue(doc, "/coupling/endpoint", "the ipc path");
+  doc["coupling"]["endpoint"] = "ipc://" + file.string() + ".absent";
+  CHECK(issuesOf(doc).empty());
+  doc["coupling"]["endpoint"] = "x";
+  requireSingleIssue(doc, "/coupling/endpoint", "must start with");
+  std::filesystem::remove(file);
+}
+
 TEST_CASE("the model extensions a diagnosis adds are study keys with ranges, absent = today's model", "[study]") {
   const Study plain = parseStudy(paper("weight_drop_1kg.json").dump(), "weight_drop_1kg.json");
   CHECK_FALSE(plain.tools[0].constraints.clamp_rotational_stiffness_Nm_per_rad);
@@ -375,10 +466,10 @@ TEST_CASE("the model extensions a diagnosis adds are study keys with ranges, abs
   CHECK(extended.tools[0].sensors.deformation_gain == 1.1);
   CHECK(parseStudy(toJson(extended).dump(), "extended.json") == extended);
   doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 0;
-  requireSingleIssue(doc, "/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", "must be > 0, got 0");
+  requireSingleIssue(doc, "/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", "must be > 0 and <= 1e9, got 0");
   doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 25.0;
   doc["tools"][0]["sensors"]["force_gain"] = -1;
-  requireSingleIssue(doc, "/tools/0/sensors/force_gain", "must be > 0, got -1");
+  requireSingleIssue(doc, "/tools/0/sensors/force_gain", "must be > 0 and <= 100, got -1");
   json rigid = paper("s235_dem_18.json");
   rigid["tools"][0]["sensors"] = {{"force_gain", 0.95}};
   requireSingleIssue(rigid, "/tools/0/sensors", "does not apply");

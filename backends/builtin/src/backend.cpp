@@ -1,5 +1,6 @@
 #include "demfem/backends/builtin/backend.hpp"
 
+#include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/plate_surface.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
@@ -8,10 +9,8 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <optional>
-#include <sstream>
 
 namespace demfem::builtin {
 
@@ -20,7 +19,7 @@ namespace {
 using adapter::CouplingError;
 using adapter::ErrorCode;
 
-constexpr char kCheckpointMagic[8] = {'D', 'F', 'B', 'K', 'E', 'N', 'D', '1'};
+constexpr char kCheckpointKind[] = "builtin";
 
 class BuiltinBackend final : public adapter::CouplingApi {
  public:
@@ -101,10 +100,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
 
   void simulate(double duration_s) override {
     alive();
-    if (!(duration_s >= 0) || !std::isfinite(duration_s))
-      throw CouplingError(ErrorCode::BadRequest, "builtin DEM: simulate() needs a finite duration >= 0, got " +
-                                                     std::to_string(duration_s));
-    const long steps = std::lround(duration_s / sim_.timeStep());
+    const long steps = static_cast<long>(adapter::demStepCount(duration_s, sim_.timeStep(), sim_.stepCount()));
     if (steps == 0) return;
     sim_.resetNodeImpulse();
     try {
@@ -146,59 +142,46 @@ class BuiltinBackend final : public adapter::CouplingApi {
 
   void checkpoint(const std::filesystem::path& file) override {
     alive();
-    std::ostringstream out(std::ios::binary);
-    {
-      out.write(kCheckpointMagic, sizeof(kCheckpointMagic));
-      sim_.saveState(out);
-      out.write(reinterpret_cast<const char*>(&last_positions_time_), 8);
-      out.write(reinterpret_cast<const char*>(&next_vtk_), 8);
-      out.write(reinterpret_cast<const char*>(&vtk_count_), 8);
-      const std::uint64_t nm = interval_mean_.size();
-      out.write(reinterpret_cast<const char*>(&nm), 8);
-      for (const auto& [m, f] : interval_mean_) {
-        const std::int64_t id = m;
-        const std::uint64_t len = f.size();
-        out.write(reinterpret_cast<const char*>(&id), 8);
-        out.write(reinterpret_cast<const char*>(&len), 8);
-        out.write(reinterpret_cast<const char*>(f.data()), static_cast<std::streamsize>(len * 8));
-      }
+    adapter::PayloadWriter out;
+    sim_.saveState(out);
+    out.put(last_positions_time_);
+    out.put(next_vtk_);
+    out.put(static_cast<std::int64_t>(vtk_count_));
+    out.put(static_cast<std::uint64_t>(interval_mean_.size()));
+    for (const auto& [m, f] : interval_mean_) {
+      out.put(static_cast<std::int64_t>(m));
+      out.putVector(f);
     }
-    try {
-      adapter::writeFileAtomically(file, out.str());
-    } catch (const adapter::OutputError& e) {
-      throw CouplingError(ErrorCode::Internal, std::string("builtin DEM checkpoint: ") + e.what());
-    }
+    adapter::writeCheckpointFile(file, kCheckpointKind, out.bytes());
   }
 
+  // The file is validated completely (container, then every array against this simulation) before
+  // anything is assigned: a refused checkpoint leaves the backend exactly as it was.
   void restore(const std::filesystem::path& file) override {
     alive();
-    std::ifstream in(file, std::ios::binary);
-    char magic[8];
-    in.read(magic, 8);
-    if (!in || std::string(magic, 8) != std::string(kCheckpointMagic, 8))
-      throw CouplingError(ErrorCode::BadRequest, file.string() + ": not a builtin DEM checkpoint");
-    try {
-      sim_.loadState(in);
-    } catch (const std::exception& e) {
-      throw CouplingError(ErrorCode::BadRequest, file.string() + ": " + e.what());
+    const std::string payload = adapter::readCheckpointFile(file, kCheckpointKind);
+    adapter::PayloadReader in(payload, "checkpoint " + file.string());
+    DemSimulation restored = sim_.withState(in);
+    const auto last_positions_time = in.get<double>(), next_vtk = in.get<double>();
+    const auto vtk_count = in.get<std::int64_t>();
+    if (!std::isfinite(last_positions_time) || !std::isfinite(next_vtk) || vtk_count < 0)
+      in.fail("output clock out of range");
+    const auto count = in.get<std::uint64_t>();
+    if (count > meshes_.size()) in.fail("more interval means than meshes");
+    std::map<int, adapter::NodeArray> interval_mean;
+    for (std::uint64_t k = 0; k < count; ++k) {
+      const auto m = in.get<std::int64_t>();
+      auto mean = in.getVector<double>();
+      if (m < 0 || m >= restored.meshCount() || mean.size() != 3 * restored.mesh(static_cast<int>(m)).nodes.size())
+        in.fail("an interval mean does not fit its mesh");
+      interval_mean[static_cast<int>(m)] = std::move(mean);
     }
-    std::uint64_t nm = 0;
-    in.read(reinterpret_cast<char*>(&last_positions_time_), 8);
-    in.read(reinterpret_cast<char*>(&next_vtk_), 8);
-    in.read(reinterpret_cast<char*>(&vtk_count_), 8);
-    in.read(reinterpret_cast<char*>(&nm), 8);
-    interval_mean_.clear();
-    for (std::uint64_t k = 0; k < nm && in; ++k) {
-      std::int64_t id = 0;
-      std::uint64_t len = 0;
-      in.read(reinterpret_cast<char*>(&id), 8);
-      in.read(reinterpret_cast<char*>(&len), 8);
-      if (len > (1u << 28)) break;
-      adapter::NodeArray f(len);
-      in.read(reinterpret_cast<char*>(f.data()), static_cast<std::streamsize>(len * 8));
-      interval_mean_[static_cast<int>(id)] = std::move(f);
-    }
-    if (!in) throw CouplingError(ErrorCode::BadRequest, file.string() + ": truncated builtin DEM checkpoint");
+    in.finish();
+    sim_ = std::move(restored);
+    last_positions_time_ = last_positions_time;
+    next_vtk_ = next_vtk;
+    vtk_count_ = static_cast<long>(vtk_count);
+    interval_mean_ = std::move(interval_mean);
     if (vtk_interval_ > 0) openVtkSeries(sim_.time());
   }
 

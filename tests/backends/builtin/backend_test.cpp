@@ -1,4 +1,5 @@
 // The builtin backend through the coupling API on a small deposited bin with a plate tool.
+#include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/adapter/plate_surface.hpp"
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/adapter/tool_drive.hpp"
@@ -12,6 +13,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <random>
 #include <numbers>
 #include <vector>
 
@@ -165,6 +168,54 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     CHECK(api->time() == ta);
     REQUIRE(a.size() == b.size());
     CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+  }
+
+  SECTION("a checkpoint with flipped bytes, cut short or inconsistent is refused; the state stays as it was") {
+    api->simulate(0.002);
+    const auto file = soil_dir.dir / "corrupt.ckpt";
+    api->checkpoint(file);
+    api->simulate(0.002);
+    const double time = api->time();
+    const auto forces = api->nodeForces("tool", adapter::ForceMode::Instantaneous);
+    std::string image;
+    {
+      std::ifstream in(file, std::ios::binary);
+      image.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const auto write = [&](const std::string& bytes) { std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes; };
+    const auto refusedAndUnchanged = [&](const std::string& bytes) {
+      write(bytes);
+      CHECK_THROWS_AS(api->restore(file), adapter::CouplingError);
+      CHECK(api->time() == time);
+      CHECK(api->nodeForces("tool", adapter::ForceMode::Instantaneous) == forces);
+    };
+    std::mt19937 rng(11);
+    std::string flipped = image;
+    for (int k = 0; k < 200; ++k) flipped[rng() % flipped.size()] ^= static_cast<char>(1 + rng() % 255);
+    refusedAndUnchanged(flipped);
+    refusedAndUnchanged(image.substr(0, image.size() / 2));
+    refusedAndUnchanged(image.substr(0, image.size() - 1));
+    // Checksummed but inconsistent: a particle's material index out of range, an array cut short.
+    std::string payload = adapter::checkpointPayload(image, "builtin", "image");
+    refusedAndUnchanged(adapter::checkpointImage("builtin", payload.substr(0, payload.size() - 8)));
+    for (std::size_t at : {payload.size() / 3, payload.size() / 2}) {
+      std::string bad = payload;
+      std::memset(bad.data() + at, 0xff, 64);
+      write(adapter::checkpointImage("builtin", bad));
+      try {  // refused, or (if the bytes hit plain values) accepted; never a crash when it runs on
+        api->restore(file);
+        api->simulate(0.001);
+      } catch (const adapter::CouplingError&) {
+      }
+      write(image);
+      api->restore(file);
+    }
+    // The intact file still restores, and the run continues from it.
+    write(image);
+    api->restore(file);
+    api->simulate(0.002);
+    CHECK(api->time() == Approx(time).epsilon(1e-12));
+    CHECK(api->nodeForces("tool", adapter::ForceMode::Instantaneous) == forces);
   }
 
   SECTION("errors carry codes") {

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <random>
-#include <sstream>
 
 using namespace demfem;
 using namespace demfem::builtin;
@@ -107,11 +106,12 @@ TEST_CASE("two runs with the same inputs and thread count are bit-identical", "[
 TEST_CASE("a restored checkpoint continues bit-identically", "[builtin]") {
   DemSimulation a = settlingBox(1, cohesiveRolling());
   a.run(700);
-  std::stringstream state;
+  adapter::PayloadWriter state;
   a.saveState(state);
   a.run(700);
   DemSimulation b = settlingBox(1, cohesiveRolling());
-  b.loadState(state);
+  adapter::PayloadReader in(state.bytes(), "state");
+  b.loadState(in);
   b.run(700);
   CHECK(a.stepCount() == b.stepCount());
   const auto xa = positions(a), xb = positions(b);
@@ -121,8 +121,9 @@ TEST_CASE("a restored checkpoint continues bit-identically", "[builtin]") {
 TEST_CASE("a checkpoint of another thread count is refused with a message", "[builtin]") {
   DemSimulation a = settlingBox(2, cohesiveRolling());
   a.run(10);
-  std::stringstream state;
+  adapter::PayloadWriter state;
   a.saveState(state);
   DemSimulation b = settlingBox(1, cohesiveRolling());
-  CHECK_THROWS_WITH(b.loadState(state), Catch::Contains("threads"));
+  adapter::PayloadReader in(state.bytes(), "state");
+  CHECK_THROWS_WITH(b.loadState(in), Catch::Contains("threads"));
 }

@@ -17,7 +17,9 @@
 //   (default) it is the impulse over the last simulate() interval divided by its duration; with
 //   Instantaneous, the value at the last DEM step (the paper's EDEM behaviour).
 // - Pre/post: simulate(d) requires d >= 0 and advances time() by d (up to the DEM step: the backend
-//   runs round(d / dt_DEM) steps and reports the time it reached). simulate(0) is allowed and changes
+//   runs demStepCount(d, dt_DEM) = round(d / dt_DEM) steps and reports the time it reached; a
+//   duration whose step count, or whose end time in steps, exceeds kMaxDemSteps is refused with
+//   BadRequest and changes nothing). simulate(0) is allowed and changes
 //   nothing but lets a client refresh derived data. setNodePositions() takes effect before the next
 //   DEM step, with normals and neighbour data updated and contact history kept.
 // - After construction: time() == 0 and every tool of the study rests, undeformed, at the start pose
@@ -50,6 +52,7 @@ enum class ErrorCode : std::int32_t {
   PeerGone = 7,
   Unsupported = 8,      // the backend does not offer this call (e.g. checkpoint)
   Internal = 9,
+  Busy = 10,            // the server serves another client's session
 };
 
 class CouplingError : public std::runtime_error {
@@ -94,6 +97,14 @@ inline RigidMotion rigidMotionOf(const study::LinearMotion& phase, double plan_s
 }
 
 using NodeArray = std::vector<double>;  // n x 3, row-major
+
+// Largest DEM step count a backend reaches (2^53: step counts and step * dt stay exact doubles).
+inline constexpr std::int64_t kMaxDemSteps = std::int64_t{1} << 53;
+
+// round(duration_s / dt_s), the steps simulate(duration_s) runs after `steps_done` steps. Throws
+// CouplingError(BadRequest) for a duration that is negative or not finite, or when steps_done plus
+// the result would exceed kMaxDemSteps.
+std::int64_t demStepCount(double duration_s, double dt_s, std::int64_t steps_done);
 
 class CouplingApi {
  public:

@@ -10,7 +10,10 @@
 //   with a message saying the DEM server is gone; the proxy is then unusable except shutdown().
 // - info() is the handshake's answer (cached). shutdown() asks the server to shut its backend down;
 //   it is idempotent and does not throw after a transport failure (the peer is gone anyway).
-// - Checkpoint/restore paths are files on the SERVER's host.
+// - Checkpoint/restore take a checkpoint NAME (protocol::isCheckpointName, e.g. "dem_25.ckpt"),
+//   not a path: the server keeps its checkpoints in its own directory. A path is refused here
+//   (BadRequest) before anything is sent.
+// - Every request after the handshake carries the session token of the hello reply.
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"
@@ -56,6 +59,7 @@ class RemoteProxy final : public CouplingApi {
   std::unique_ptr<protocol::ClientSocket> socket_;
   std::string endpoint_;
   std::uint64_t seq_ = 0;
+  std::string session_;
   BackendInfo info_;
   bool shut_down_ = false;
 };

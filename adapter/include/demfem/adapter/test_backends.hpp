@@ -16,8 +16,10 @@
 // F/n_tip (1 + X_x/W) sin(w (t0+t1)/2) sinc(w (t1-t0)/2); the constant and spring loads are constant
 // over an interval (positions change only between intervals). Before the first simulate(), or after
 // simulate(0), the interval is empty and the instantaneous value at time() is returned.
-// Time is step_count * dem_time_step_s exactly (simulate(d) runs round(d / dt) steps).
-// checkpoint()/restore() write/read a small binary file; a restored backend continues bit-identically.
+// Time is step_count * dem_time_step_s exactly (simulate(d) runs demStepCount(d, dt) steps; the
+// count never passes kMaxDemSteps, so time cannot wrap).
+// checkpoint()/restore() write/read a checkpoint_file.hpp container (kind "test-KIND"); a restored
+// backend continues bit-identically, and a refused file leaves the backend as it was.
 // Built from tools without soil, every tool rests at the bin origin (velocity 0, t0 0) until the
 // client sets a RigidMotion; the loads above do not depend on it.
 #pragma once

@@ -40,9 +40,9 @@
 //   (CoupledRunInterrupted for a stop request); when the marking itself fails (a full disk), the
 //   rethrown message says which files could not be marked (a CSV left as sensors.csv.partial, a
 //   sidecar still saying "running").
-// - Checkpoint/restart: every checkpoint_every steps the DEM writes
-//   output_dir/checkpoint/dem_STEP.ckpt (through the API, on the DEM's host; absolute path) and the
-//   driver then writes checkpoint/fem_state.bin (integrator state, step, plan start on the DEM
+// - Checkpoint/restart: every checkpoint_every steps the DEM writes the checkpoint NAMED
+//   dem_STEP.ckpt (through the API; the DEM server resolves it in its own checkpoint directory,
+//   which `demfem run` sets to output_dir/checkpoint) and the driver then writes checkpoint/fem_state.bin (integrator state, step, plan start on the DEM
 //   clock, output sizes), which commits the pair. resume = true restores both (nothing is re-sent:
 //   the DEM's checkpoint holds the tool's motion, positions and their velocity), truncates the
 //   outputs to the checkpoint and continues; on a backend whose checkpoint restores bit-identically

@@ -33,7 +33,9 @@ enum class WireError : std::int32_t {
   PeerGone = 7,
   Unsupported = 8,
   Internal = 9,
+  Busy = 10,  // another client owns the server's session
 };
+inline constexpr std::int32_t kLastWireError = 10;
 
 // A message that cannot be decoded or a transport failure. `code` says which (BadRequest for a
 // malformed message, VersionMismatch, Timeout, PeerGone, ...).
@@ -92,12 +94,14 @@ struct SetRigidMotion {
   RigidMotionData motion;
   bool operator==(const SetRigidMotion&) const = default;
 };
-struct Checkpoint {  // file path on the server's host
-  std::string file;
+// A checkpoint is named, not located: `name` is a file name (see isCheckpointName()) that the
+// server resolves in its own checkpoint directory.
+struct Checkpoint {
+  std::string name;
   bool operator==(const Checkpoint&) const = default;
 };
 struct Restore {
-  std::string file;
+  std::string name;
   bool operator==(const Restore&) const = default;
 };
 struct Shutdown { bool operator==(const Shutdown&) const = default; };
@@ -107,17 +111,27 @@ using RequestBody = std::variant<Hello, ListGeometries, GetTime, GetNodePosition
                                  Checkpoint, Restore, Shutdown>;
 
 struct Request {
-  std::uint64_t seq = 0;  // chosen by the client, strictly increasing; echoed in the reply
+  Request(std::uint64_t seq_ = 0, RequestBody body_ = {}, std::string session_ = {})
+      : seq(seq_), body(std::move(body_)), session(std::move(session_)) {}
+  std::uint64_t seq;    // chosen by the client, strictly increasing within a session; echoed
   RequestBody body;
+  std::string session;  // the token of the hello reply (empty in hello, and for servers without one)
   bool operator==(const Request&) const = default;
 };
 
 // ---- replies (server -> client) ----
 struct HelloReply {
-  std::int32_t protocol_version = kProtocolVersion;
+  HelloReply(std::int32_t protocol_version_ = kProtocolVersion, std::string backend_ = {},
+             std::string backend_version_ = {}, double dem_time_step_s_ = 0, std::string session_ = {},
+             double max_simulate_s_ = 0)
+      : protocol_version(protocol_version_), backend(std::move(backend_)), backend_version(std::move(backend_version_)),
+        dem_time_step_s(dem_time_step_s_), session(std::move(session_)), max_simulate_s(max_simulate_s_) {}
+  std::int32_t protocol_version;
   std::string backend;          // "builtin", "liggghts", "harmonic", ...
   std::string backend_version;
-  double dem_time_step_s = 0;
+  double dem_time_step_s;
+  std::string session;          // token the client sends with every later request ("" = none)
+  double max_simulate_s;        // longest simulate duration the server accepts (0 = not stated)
   // Optional header field "soil": a JSON object describing the settled soil the DEM started from
   // (figures of its deposition); kept here as that object's JSON text, "" when absent.
   std::string soil_json;
@@ -165,5 +179,10 @@ struct Reply {
 
 // Wire name of a request ("hello", "get_node_forces", ...).
 std::string opName(const RequestBody& body);
+
+// Checkpoint names: 1 to 128 characters of [A-Za-z0-9._-], not starting with '.' (so never "..",
+// a hidden file or a path).
+inline constexpr std::size_t kMaxCheckpointNameBytes = 128;
+bool isCheckpointName(const std::string& name);
 
 }  // namespace demfem::protocol

@@ -1,5 +1,5 @@
-// ZeroMQ transport of the demfem protocol: a REP server socket and a REQ client socket carrying the
-// multipart messages of codec.hpp, over inproc://, ipc:// or tcp://.
+// ZeroMQ transport of the demfem protocol: a ROUTER server socket and a REQ client socket carrying
+// the multipart messages of codec.hpp, over inproc://, ipc:// or tcp://.
 //
 // Contract
 // - Timeouts everywhere: ClientSocket::request() throws ProtocolError(Timeout) when no reply arrives
@@ -7,6 +7,11 @@
 //   unusable (REQ state) and every later request throws PeerGone; a signal interrupting the wait
 //   throws ProtocolError(Internal) saying so. ServerSocket::receive() returns
 //   nothing after its timeout, so a server can notice a vanished client.
+// - The server socket is a ROUTER: every request arrives with the routing id ZeroMQ gave the
+//   connection it came on (PeerAddress), and the reply goes back to that connection only. Several
+//   clients may be connected; which one the server serves is the server's business (adapter/server.hpp).
+// - ipc:// endpoints: ZeroMQ unlinks the path before binding, so checkBindEndpoint() refuses an ipc
+//   path that exists and is not a socket (binding must never delete a file).
 // - Loopback by default: a server refuses to bind tcp:// to a non-loopback address unless CurveZMQ
 //   keys are given (then clients must authenticate).
 // - CurveZMQ key directory (made by writeCurveKeyDirectory(), keys from zmq_curve_keypair, Z85 text
@@ -14,6 +19,8 @@
 //   server.secret and client.pub (the only client key it accepts, checked by a ZAP handler); the
 //   client needs server.pub, client.pub and client.secret. A client with another key is refused:
 //   its request() throws ProtocolError(PeerGone) naming the refusal.
+// - A server that closes the connection (it stopped or crashed) makes the pending or next request()
+//   throw ProtocolError(PeerGone) at once instead of waiting for the timeout.
 // - Frames above kMaxFrameBytes are dropped by ZeroMQ (ZMQ_MAXMSGSIZE) before they reach the codec.
 #pragma once
 
@@ -53,9 +60,23 @@ void writeCurveKeyDirectory(const std::filesystem::path& dir);
 ServerSecurity loadServerSecurity(const std::filesystem::path& dir);
 ClientSecurity loadClientSecurity(const std::filesystem::path& dir);
 
-// Throws std::invalid_argument if `endpoint` is not inproc://, ipc:// or tcp://HOST:PORT, or if it is
-// tcp:// on a non-loopback host while `with_curve` is false.
+// Throws std::invalid_argument if `endpoint` is not inproc://, ipc:// or tcp://HOST:PORT, if it is
+// tcp:// on a non-loopback host while `with_curve` is false, or if it is ipc://PATH where PATH
+// exists and is not a socket.
 void checkBindEndpoint(const std::string& endpoint, bool with_curve);
+
+// The connection a request came on: ZeroMQ's routing id, and whether the peer framed it with the
+// empty delimiter of a REQ socket (the reply is framed the same way).
+struct PeerAddress {
+  std::string routing_id;
+  bool delimited = true;
+  bool operator==(const PeerAddress&) const = default;
+};
+
+struct Incoming {
+  PeerAddress from;
+  Multipart message;
+};
 
 class ServerSocket {
  public:
@@ -68,10 +89,10 @@ class ServerSocket {
 
   // The endpoint actually bound (with the chosen port).
   const std::string& endpoint() const { return endpoint_; }
-  // Next request, or nothing after `timeout`.
-  std::optional<Multipart> receive(std::chrono::milliseconds timeout);
-  // Reply to the request last received.
-  void send(const Multipart& reply);
+  // Next request, or nothing after `timeout`. A message without a routing envelope is dropped.
+  std::optional<Incoming> receive(std::chrono::milliseconds timeout);
+  // Reply to the connection `to` (dropped by ZeroMQ if it has gone).
+  void send(const PeerAddress& to, const Multipart& reply);
 
  private:
   class ZapHandler;

@@ -35,7 +35,8 @@ struct Issue {
 };
 
 // Thrown by loadStudy()/parseStudy() with every problem found, not just the first. what() lists them
-// as "FILE: PATH: MESSAGE" lines ("FILE: MESSAGE" when the path is empty).
+// as "FILE: PATH: MESSAGE" lines ("FILE: MESSAGE" when the path is empty). File, paths and messages
+// are valid UTF-8 (bytes that are not are written as \xNN).
 class StudyError : public std::runtime_error {
  public:
   StudyError(std::string file, std::vector<Issue> issues);
@@ -222,10 +223,15 @@ struct DemSettings {
 
 enum class ForceAveraging { IntervalMean, Instantaneous };
 
+// Longest simulated time one simulate call may ask of a DEM server, unless the study raises it:
+// 1000 FEM steps of the paper's 1 ms.
+inline constexpr double kDefaultMaxSimulateS = 1.0;
+
 struct CouplingSettings {
   std::string endpoint;              // empty: chosen by `demfem run` (ipc://)
   ForceAveraging force_averaging = ForceAveraging::IntervalMean;
   double timeout_s = 30.0;
+  double max_simulate_s = kDefaultMaxSimulateS;
   bool operator==(const CouplingSettings&) const = default;
 };
 
@@ -291,6 +297,10 @@ DepositionBackend parseDepositionBackend(const std::string& name);
 
 // True for the kinds that simulate soil (coupled, dem-only, cone-penetration).
 bool hasSoil(StudyKind kind);
+
+// `text` with every byte that is not part of a well-formed UTF-8 sequence written as \xNN: file
+// names and quoted file content can then always be printed and stored in JSON reports.
+std::string validUtf8(std::string_view text);
 
 // FNV-1a 64-bit hash of `bytes` (offset basis 14695981039346656037, prime 1099511628211), the hash
 // soilHash() applies to its canonical text.

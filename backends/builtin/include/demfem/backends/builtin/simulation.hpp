@@ -25,6 +25,7 @@
 //   the reactions of the particle contacts, split by barycentric weights (force and moment conserved).
 #pragma once
 
+#include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/backends/builtin/contact_law.hpp"
 #include "demfem/backends/builtin/triangle_mesh.hpp"
 #include "demfem/study/study.hpp"
@@ -128,9 +129,14 @@ class DemSimulation {
   std::size_t bytesPerParticle() const;  // memory of all per-particle and per-contact arrays / N
 
   // Bit-exact state (particles, lists, histories, meshes, time). A restored simulation continues
-  // bit-identically. loadState() requires the same soil (materials, contact model) and threads.
-  void saveState(std::ostream& out) const;
-  void loadState(std::istream& in);
+  // bit-identically. withState() returns this simulation with the saved state; it requires the
+  // same set-up (soil, threads, particles, walls, meshes; what the study fixes must be equal) and
+  // checks what evolves (finite, sized to the particles, indices in range), throwing
+  // adapter::CouplingError(BadRequest) naming the first inconsistency; *this is never changed.
+  // loadState() is the same with the strong guarantee: on a throw the state is as it was.
+  void saveState(adapter::PayloadWriter& out) const;
+  DemSimulation withState(adapter::PayloadReader& in) const;
+  void loadState(adapter::PayloadReader& in);
 
   // Legacy VTK polydata of the particles (radius, layer, velocity) for ParaView. Written atomically;
   // throws adapter::OutputError (adapter/output_files.hpp) naming the file.
@@ -169,6 +175,7 @@ class DemSimulation {
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
   void useMaterial(int material, bool particle);
   [[noreturn]] void fail(std::size_t particle, const std::string& what) const;
+  void checkRestoredAgainst(const DemSimulation& live, const adapter::PayloadReader& in) const;
 
   MaterialTable table_;
   study::ContactModel model_;
