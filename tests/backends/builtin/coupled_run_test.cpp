@@ -64,7 +64,7 @@ fs::path freshDir(const std::string& name) {
 // every simulate() (the rigid motion the DEM moves its mesh by, at its clock).
 class HeightRecorder final : public adapter::CouplingApi {
  public:
-  explicit HeightRecorder(adapter::CouplingApi& dem) : dem_(dem) { record(); }
+  HeightRecorder(adapter::CouplingApi& dem, std::string tool) : dem_(dem), tool_(std::move(tool)) { record(); }
   std::vector<double> heights_m;
   adapter::RigidMotion initial;
   double initial_time_s = -1;
@@ -87,12 +87,13 @@ class HeightRecorder final : public adapter::CouplingApi {
 
  private:
   void record() {
-    const auto m = dem_.rigidMotion("tool");
+    const auto m = dem_.rigidMotion(tool_);
     const double t = dem_.time();
     if (initial_time_s < 0) initial = m, initial_time_s = t;
     heights_m.push_back(m.origin_m[1] + m.velocity_m_s[1] * (t - m.t0_s));
   }
   adapter::CouplingApi& dem_;
+  std::string tool_;
 };
 
 // POINTS of a legacy VTK polydata file (x y z per point).
@@ -133,7 +134,7 @@ TEST_CASE("a coupled run on the builtin DEM moves the tool once: down from the p
   REQUIRE(plan.drag_steps == 100);
 
   auto backend = builtin::makeBackend(study);
-  HeightRecorder dem(*backend);
+  HeightRecorder dem(*backend, study.tools[0].name);
   // Built at rest at the plan's start pose, on a clock at 0 (coupling_api.hpp).
   CHECK(dem.initial_time_s == 0);
   CHECK(dem.initial.origin_m[0] == Approx(0.045).margin(1e-15));
@@ -166,13 +167,14 @@ TEST_CASE("a coupled run on the builtin DEM moves the tool once: down from the p
   // One clock: at every instant both wrote, the FEM's tool nodes are the DEM's (the DEM files are
   // written by the backend itself into output.directory/vtk), and both collections give the DEM time.
   const fs::path vtk = dir / "out" / "vtk";
-  const auto fem_series = pvdEntries(vtk / "fem-tool.pvd"), dem_series = pvdEntries(vtk / "dem-tool.pvd");
+  const std::string& tool = study.tools[0].name;
+  const auto fem_series = pvdEntries(vtk / ("fem-" + tool + ".pvd")), dem_series = pvdEntries(vtk / ("dem-" + tool + ".pvd"));
   CHECK(fem_series.size() == static_cast<std::size_t>((plan.totalSteps() - 1) / 10 + 1));  // steps 0, 10, ..., 190
   CHECK(dem_series.size() == fem_series.size());
   CHECK(pvdEntries(vtk / "particles.pvd").size() == dem_series.size());
   double largest_gap = 0;
   for (const auto& [fem_file, fem_time] : fem_series) {
-    const std::string dem_file = "dem-" + fem_file.substr(4);  // fem-tool_NNNNNN.vtk -> dem-tool_NNNNNN.vtk
+    const std::string dem_file = "dem-" + fem_file.substr(4);  // fem-TOOL_NNNNNN.vtk -> dem-TOOL_NNNNNN.vtk
     INFO(fem_file << " at t = " << fem_time << " s");
     REQUIRE(dem_series.count(dem_file) == 1);
     CHECK(dem_series.at(dem_file) == fem_time);

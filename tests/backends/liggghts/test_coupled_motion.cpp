@@ -49,7 +49,9 @@ study::Study smallCoupledStudy() {
 // last positions put it (nodePositions() is the mesh minus the rigid motion).
 class MotionRecorder final : public adapter::CouplingApi {
  public:
-  explicit MotionRecorder(adapter::CouplingApi& dem) : dem_(dem), set_(dem.nodePositions("tool")) { record(); }
+  MotionRecorder(adapter::CouplingApi& dem, std::string tool) : dem_(dem), tool_(std::move(tool)), set_(dem.nodePositions(tool_)) {
+    record();
+  }
   std::vector<double> heights_m;
   double largest_mesh_offset_m = 0;
 
@@ -74,12 +76,13 @@ class MotionRecorder final : public adapter::CouplingApi {
 
  private:
   void record() {
-    const auto m = dem_.rigidMotion("tool");
+    const auto m = dem_.rigidMotion(tool_);
     heights_m.push_back(m.origin_m[1] + m.velocity_m_s[1] * (dem_.time() - m.t0_s));
-    const auto xyz = dem_.nodePositions("tool");
+    const auto xyz = dem_.nodePositions(tool_);
     for (std::size_t v = 0; v < xyz.size(); ++v) largest_mesh_offset_m = std::max(largest_mesh_offset_m, std::abs(xyz[v] - set_[v]));
   }
   adapter::CouplingApi& dem_;
+  std::string tool_;
   adapter::NodeArray set_;
 };
 
@@ -96,7 +99,7 @@ TEST_CASE("a coupled run on LIGGGHTS moves the tool once: down from the plan's s
   auto backend = liggghts::makeBackend(study, backend_options);
 
   // Built at rest at the plan's start pose (x = center_x), clock at 0 (coupling_api.hpp).
-  const auto initial = backend->rigidMotion("tool");
+  const auto initial = backend->rigidMotion(study.tools[0].name);
   CHECK(backend->time() == 0);
   for (std::size_t c = 0; c < 3; ++c) {
     CHECK(initial.origin_m[c] == Approx(plan.start_m[c]).margin(1e-15));
@@ -104,7 +107,7 @@ TEST_CASE("a coupled run on LIGGGHTS moves the tool once: down from the plan's s
   }
   CHECK(plan.start_m[0] == Approx(0.030).margin(1e-15));
 
-  MotionRecorder dem(*backend);
+  MotionRecorder dem(*backend, study.tools[0].name);
   fem::CoupledRunOptions options;
   options.output_dir = dir / "out";
   const auto summary = fem::CoupledDriver(study, options).run(dem);
