@@ -60,6 +60,7 @@ struct PlaneWall {
   Vec3 point{0, 0, 0};
   Vec3 normal{0, 1, 0};  // unit, pointing into the particle side
   int material = 0;
+  std::int32_t padding = 0;  // named: a checkpoint holds the struct's bytes, none of them undefined
 };
 
 struct Domain {
@@ -151,6 +152,7 @@ class DemSimulation {
     double hist[7];
     ContactStiffness stiffness;     // fixed for the particle-wall pair: computed when the contact opens
     std::int32_t nodes[3];
+    std::int32_t padding;           // named: a checkpoint holds the struct's bytes (zero)
     double weights[3];
     double force[3];                // on the particle
   };
