@@ -74,6 +74,8 @@ struct ParticleState {
   int layer = 0;
 };
 
+struct WallTouch;  // a wall feature a particle touches (wall_forces.cpp)
+
 class DemSimulation {
  public:
   DemSimulation(const study::Soil& soil, const Domain& domain, int threads);
@@ -159,13 +161,25 @@ class DemSimulation {
 
   struct CellGrid;
   void step();
+  // neighbour_lists.cpp: linked cells, the half pair list, the wall candidates (broad search)
   void rebuildLists();
   void buildNeighbourList(const CellGrid& grid);
   void buildWallCandidates(const CellGrid& grid);
   bool meshesMovedBeyondSkin() const;
   void updateMeshBinNodes();
-  template <study::NormalModel N, study::RollingModel R> void pairForces();
-  template <study::NormalModel N, study::RollingModel R> void wallForces();
+  // pair_forces.cpp and wall_forces.cpp: each a loop per contact model (template arguments)
+  void pairForces();
+  template <study::NormalModel N, study::RollingModel R> void pairLoop();
+  void wallForces();
+  template <study::NormalModel N, study::RollingModel R> void wallLoop();
+  int planeTouches(std::size_t i, WallTouch* touch, int count) const;  // fine search: appends, returns the count
+  int meshTouches(std::size_t i, WallTouch* touch, int count) const;
+  void matchHistory(std::size_t i, const WallTouch* touch, int count, const bool* accepted, int* matched_old) const;
+  WallContact openWallContact(std::size_t i, const WallTouch& touch, int matched_old) const;
+  Vec3 wallVelocity(const WallTouch& touch) const;
+  int wallMaterial(int wall) const;
+  void gatherWallContacts();
+  void scatterWallForces();
   void resetForce(std::size_t i) {  // gravity only, no torque: the start of every force evaluation
     for (int c = 0; c < 3; ++c) {
       f_[3 * i + c] = mass_[i] * gravity_[c];
