@@ -79,17 +79,22 @@ struct ContactStiffness {
 inline ContactStiffness contactStiffness(const study::ContactModel& model, const PairLaw& law,
                                          double reff, double meff) {
   ContactStiffness s;
-  if (model.normal == study::NormalModel::EdemHysteretic) {
-    s.kn = 5.0 * reff * law.yield_min_Pa;
-    s.kt = model.stiffness_factor * s.kn;
-    s.gamma_n = 2.0 * model.damping_factor * std::sqrt(meff * s.kn);  // on the K1 branch
-    s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
-  } else {
-    s.kn = physics::hookeNormalStiffness(law.youngs_eff_Pa, reff, meff, model.characteristic_velocity_m_s);
-    s.kt = s.kn;
-    const double q = std::numbers::pi / law.log_restitution;
-    s.gamma_n = std::sqrt(4.0 * meff * s.kn / (1.0 + q * q));
-    s.gamma_t = s.gamma_n;
+  switch (model.normal) {  // no default: a new normal law must say its stiffness here
+    case study::NormalModel::EdemHysteretic:
+      s.kn = 5.0 * reff * law.yield_min_Pa;
+      s.kt = model.stiffness_factor * s.kn;
+      s.gamma_n = 2.0 * model.damping_factor * std::sqrt(meff * s.kn);  // on the K1 branch
+      s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
+      return s;
+    case study::NormalModel::Hooke:
+    case study::NormalModel::HookeHysteresis: {
+      s.kn = physics::hookeNormalStiffness(law.youngs_eff_Pa, reff, meff, model.characteristic_velocity_m_s);
+      s.kt = s.kn;
+      const double q = std::numbers::pi / law.log_restitution;
+      s.gamma_n = std::sqrt(4.0 * meff * s.kn / (1.0 + q * q));
+      s.gamma_t = s.gamma_n;
+      return s;
+    }
   }
   return s;
 }
