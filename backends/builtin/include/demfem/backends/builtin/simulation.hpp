@@ -1,5 +1,5 @@
 // The built-in DEM engine (docs/architecture.md section 5): spheres, plane walls and triangle-mesh walls,
-// velocity-Verlet integration, linked cells + Verlet lists with a skin, OpenMP.
+// velocity-Verlet integration, linked cells + Verlet lists with a skin, a thread team (thread_team.hpp).
 //
 // Contract
 // - SI units, bin frame (x across, y up, z along the bin; docs/architecture.md section 10). Gravity along -y
@@ -15,6 +15,9 @@
 // - Determinism: with the same inputs and thread count, results are bit-identical. Each thread sums
 //   pair forces into its own buffer over a static partition of the particles; the buffers are added
 //   in thread order. Wall contacts are gathered in particle order.
+// - Threads: each simulation owns its team of `threads` threads (a copy gets its own); one step is
+//   one run of the team (docs/builtin-dem.md, "Threads on a shared machine"). A simulation is used
+//   by one caller at a time.
 // - Time step: setTimeStep() refuses a step above the stability limit of the stiffest spring
 //   (2 sqrt(m*/k_max), explicit central-difference limit of an undamped oscillator).
 // - Failure: run() throws BlowUp naming the particle, the step and what went wrong (NaN, overlap
