@@ -9,13 +9,14 @@
 // - barrier(): every thread of the run calls it the same number of times; none passes until all
 //   have arrived, and memory written before it is visible to every thread after it.
 // - Wait policy, for a machine shared with other processes: a waiting thread spins for at most
-//   kSpinIterations pauses (about 20-50 microseconds, a few per cent of a step), then sleeps in the
-//   kernel until woken. A thread that lost its core therefore costs the others one short spin, not
-//   its whole time slice.
+//   kSpin (10 microseconds), then sleeps in the kernel until woken. A thread that lost its core
+//   therefore costs the others one short spin, not its whole time slice, and a waiting thread
+//   gives its core to whoever can use it (its own partner first of all).
 // - Copying a team makes a new team of the same size (a simulation's copy gets its own threads).
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <cstdint>
@@ -71,7 +72,7 @@ class ThreadTeam {
   }
 
  private:
-  static constexpr int kSpinIterations = 2000;
+  static constexpr std::chrono::microseconds kSpin{10};
 
   static void pause() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -84,9 +85,11 @@ class ThreadTeam {
   // Spin a little, then sleep until `value` changes (a notifier stores, then calls wake()).
   template <class T>
   void waitWhile(const std::atomic<T>& value, T old) {
-    for (int k = 0; k < kSpinIterations; ++k) {
+    const auto until = std::chrono::steady_clock::now() + kSpin;
+    for (int k = 0;; ++k) {
       if (value.load(std::memory_order_acquire) != old) return;
       pause();
+      if (k % 16 == 15 && std::chrono::steady_clock::now() > until) break;
     }
     std::unique_lock<std::mutex> lock(mutex_);
     wake_.wait(lock, [&] { return value.load(std::memory_order_acquire) != old; });
