@@ -131,6 +131,7 @@ struct ContactKinematics {
   double vn;          // normal relative velocity (v_i - v_j) . n
   double vt[3];       // tangential relative velocity at the contact point (incl. rotation)
   double wrel[3];     // w_i - w_j (wall: w_i)
+  double wrel_norm;   // |wrel| (needed by cdt only; the pair loop computes it for a batch of contacts)
   double wi[3], wj[3];// angular velocities (wall: wj = 0)
   double reff;        // R* (wall: R_i)
   double di, dj;      // centre-to-contact distances (wall: dj = 0)
@@ -274,7 +275,7 @@ template <study::NormalModel N, study::RollingModel R>
       if (wjm > 0) out.torque_j[c] -= f * k.dj * k.wj[c] / wjm;
     }
   } else if constexpr (R == study::RollingModel::Cdt) {
-    const double wm = std::sqrt(dot3(k.wrel, k.wrel));
+    const double wm = k.wrel_norm;
     if (wm > 0) {
       const double arm = wall ? k.di : k.reff;
       const double scale = law.rolling_friction * s.kn * k.delta * arm / wm;
