@@ -76,6 +76,10 @@ class Evaluator {
 
  private:
   std::vector<analysis::Recording> runAll(const nlohmann::ordered_json& study) {
+    std::vector<study::Study> to_run;
+    for (const auto& key : cases_)
+      if (study::Study s = studyOf(study, key); !cache_ || !cache_->find(model_.name(), s, key)) to_run.push_back(std::move(s));
+    if (!to_run.empty()) model_.prepare(to_run);
     std::vector<analysis::Recording> out(cases_.size());
     std::vector<std::exception_ptr> errors(cases_.size());
     std::atomic<std::size_t> next{0};
@@ -98,8 +102,13 @@ class Evaluator {
     return out;
   }
 
+  study::Study studyOf(const nlohmann::ordered_json& study_json, const analysis::CaseKey& key) const {
+    return caseStudy(study_json, origin_, key,
+                     options_.stroke_ends_with_window ? std::optional(options_.objective.analysis.evaluation.window_end_mm) : std::nullopt);
+  }
+
   analysis::Recording runCase(const nlohmann::ordered_json& study_json, const analysis::CaseKey& key) {
-    const study::Study study = caseStudy(study_json, origin_, key);
+    const study::Study study = studyOf(study_json, key);
     if (cache_)
       if (auto hit = cache_->find(model_.name(), study, key)) {
         ++cache_hits_;

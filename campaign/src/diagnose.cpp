@@ -194,7 +194,10 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   d.measured = recordings;
   const std::vector<const Cause*> causes = candidates(recordings, settings);
   if (settings.on_stage) settings.on_stage("baseline prediction");
-  d.baseline_residuals = predict(study, origin, recordings, model, settings.calibration, &d.baseline_runs);
+  // The baseline runs the whole stroke: the end-of-stroke signature compares like with like.
+  CalibrationOptions whole_stroke = settings.calibration;
+  whole_stroke.stroke_ends_with_window = false;
+  d.baseline_residuals = predict(study, origin, recordings, model, whole_stroke, &d.baseline_runs);
   d.baseline_error_percent = errorPercent(d.baseline_residuals);
   d.baseline_chi2 = chi2(d.baseline_residuals);
   d.residual_count = static_cast<int>(d.baseline_residuals.size());

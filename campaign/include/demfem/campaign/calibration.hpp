@@ -12,7 +12,8 @@
 //   sequence; each a local NLopt run: BOBYQA (COBYLA for one parameter) for smooth objectives
 //   (weight drops), Subplex for noisy ones (DEM, ObjectiveKind::Noisy); absolute x tolerance
 //   `x_tolerance`, initial step 0.1, at most `max_evaluations`
-//   per start. Cases of one evaluation run concurrently on `jobs` threads.
+//   per start. Cases of one evaluation run concurrently on `jobs` threads, after Model::prepare()
+//   with the studies of those of them not in the run cache.
 // - Every model run goes through the RunCache in `cache_dir` (empty = none): a repeated or resumed
 //   calibration reruns nothing already run.
 // - Uncertainty: local curvature. The Gauss-Newton Hessian H = 2 J^T J of chi2 in optimiser
@@ -67,10 +68,22 @@ struct CalibrationOptions {
   double unidentified_relative = 0.3;
   double noise_chi2 = 1.0;
   int jobs = 2;
+  // Soil-bin cases run with the stroke cut to objective.analysis.evaluation.window_end_mm when the
+  // study's is longer: nothing after the window enters the objective (docs/calibration.md, "Cost").
+  bool stroke_ends_with_window = false;
   std::filesystem::path cache_dir;
   std::function<void(const CalibrationProgress&)> on_progress;
   std::function<bool()> stop_requested;
 };
+
+// The optimiser steps of a noisy (DEM) objective: x tolerance 0.02 and curvature step 0.05 of each
+// parameter's bounds. A soil run is one realisation of a random packing: its window mean moves by a
+// few percent between neighbouring parameter values for no physical reason, so smaller steps only
+// resolve that noise (docs/calibration.md, "Optimiser").
+inline void useNoisySteps(CalibrationOptions& options) {
+  options.x_tolerance = 0.02;
+  options.curvature_step = 0.05;
+}
 
 struct CalibrationProblem {
   nlohmann::ordered_json study;  // the study file's JSON

@@ -1,0 +1,111 @@
+// Soil calibration and diagnosis benchmark (docs/calibration.md, "Soil against LIGGGHTS"): the
+// layered-bin fixture of the physics test (tests/campaign/liggghts_layered_bin.hpp, LIGGGHTS itself
+// from the deck kept with the test), by default the small bin of the issue (about 2,500 particles,
+// 200 mm stroke, depths 12, 30, 45 mm, five seeds); then `--preset layered-soil`, the single-layer
+// fit at the shallowest depth and the diagnosis of the single-layer study, each timed. Prints a
+// table; --json writes the same numbers.
+#include "layered_soil_study.hpp"
+
+#include "demfem/cli/cli_support.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace demfem;
+using Clock = std::chrono::steady_clock;
+
+nlohmann::json parametersJson(const campaign::StagedCalibration& c) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& r : c.results)
+    for (const auto& p : r.parameters)
+      out.push_back({{"pointer", p.spec.pointer}, {"value", p.best}, {"std_dev", p.std_dev}, {"identified", p.identified},
+                     {"evaluations", r.evaluations}, {"model_runs", r.model_runs}, {"wall_time_s", r.wall_time_s}});
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"demfem-bench-soil-calibrate: soil calibration and diagnosis of a two-layer bin against LIGGGHTS itself"};
+  app.name("demfem-bench-soil-calibrate");
+  campaign::test::LayeredBin bin;
+  bool ci_bin = false, no_diagnosis = false;
+  int max_evaluations = 12;
+  double window_begin_mm = 50;
+  std::string out_dir = "bench-soil", recordings_dir;
+  bin.seeds = 5;
+  app.add_flag("--ci-bin", ci_bin, "The physics test's bin (80 x 140 mm, 50 mm stroke, 3 seeds) instead of the small bin");
+  app.add_option("--seeds", bin.seeds, "LIGGGHTS deposition seeds (1..5)")->check(CLI::Range(1, 5))->capture_default_str();
+  app.add_option("--jobs", bin.jobs, "Runs at once (LIGGGHTS processes; cases of one evaluation)")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--max-evaluations", max_evaluations, "Objective evaluations per fit")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--window-begin-mm", window_begin_mm, "Start of the statistics window (it ends with the stroke)")->capture_default_str();
+  app.add_option("--out", out_dir, "Working directory (LIGGGHTS runs, soils, run cache)")->capture_default_str();
+  app.add_option("--recordings", recordings_dir, "Use the LIGGGHTS recordings of an earlier run in this directory instead of running LIGGGHTS")
+      ->check(CLI::ExistingDirectory);
+  app.add_flag("--no-diagnosis", no_diagnosis, "Skip the diagnosis");
+  std::string& json_target = cli::addJsonOption(app);
+  app.callback([&] {
+    if (ci_bin) {
+      bin.seeds = std::min(bin.seeds, 3);
+      window_begin_mm = 15;
+    } else {
+      bin.width_m = 0.12, bin.length_m = 0.33, bin.stroke_m = 0.2;
+    }
+    const fs::path out(out_dir);
+    fs::create_directories(out);
+    if (!std::getenv("DEMFEM_SOIL_DIR")) ::setenv("DEMFEM_SOIL_DIR", (out / "soil").c_str(), 1);
+    auto t = Clock::now();
+    double liggghts_s = 0;
+    std::vector<fs::path> files;
+    if (recordings_dir.empty()) {
+      std::fprintf(stderr, "LIGGGHTS: %d depositions, %zu drags\n", bin.seeds, bin.depths_mm.size() * static_cast<std::size_t>(bin.seeds));
+      files = campaign::test::runLayeredBin(bin, out / "liggghts");
+      liggghts_s = campaign::test::detail::secondsSince(t);
+    } else {
+      files.push_back(recordings_dir);
+    }
+    const auto recordings = analysis::readRecordings(files);
+    const auto options = campaign::test::layeredSoilOptions(bin, window_begin_mm, max_evaluations, out / "runs");
+    campaign::DiagnosisSettings diagnosis;
+    diagnosis.calibration = options;
+    diagnosis.on_stage = [start = Clock::now()](const std::string& stage) {
+      std::fprintf(stderr, "diagnose: %s (%.0f s elapsed)\n", stage.c_str(), campaign::test::detail::secondsSince(start));
+    };
+    std::fprintf(stderr, "calibrating (at most %d evaluations per fit)\n", max_evaluations);
+    const auto o = campaign::test::runLayeredSoil(bin, recordings, options, no_diagnosis ? nullptr : &diagnosis);
+
+    nlohmann::json depths = nlohmann::json::array();
+    std::printf("%-8s %22s %14s %14s\n", "depth", "LIGGGHTS draught (N)", "two layers", "one layer");
+    for (const auto& d : o.depths) {
+      std::printf("%5.0f mm %13.3f +- %5.3f %14.3f %14.3f\n", d.depth_mm, d.liggghts_mean_N, d.liggghts_sd_N, d.calibrated_N,
+                  d.single_layer_N);
+      depths.push_back({{"depth_mm", d.depth_mm}, {"liggghts_mean_N", d.liggghts_mean_N}, {"liggghts_sd_N", d.liggghts_sd_N},
+                        {"calibrated_N", d.calibrated_N}, {"single_layer_N", d.single_layer_N}});
+    }
+    std::printf("LIGGGHTS runs: %.0f s; layered-soil calibration + prediction: %.0f s; single layer: %.0f s\n", liggghts_s, o.layered_wall_s,
+                o.single_wall_s);
+    nlohmann::json doc = {{"seeds", bin.seeds},
+                          {"stroke_mm", bin.stroke_m * 1000},
+                          {"bin_mm", {bin.width_m * 1000, bin.length_m * 1000, bin.fill_m * 1000}},
+                          {"window_begin_mm", window_begin_mm},
+                          {"max_evaluations", max_evaluations},
+                          {"jobs", bin.jobs},
+                          {"depths", depths},
+                          {"liggghts_wall_s", liggghts_s},
+                          {"layered_calibration_wall_s", o.layered_wall_s},
+                          {"single_layer_wall_s", o.single_wall_s},
+                          {"layered_parameters", parametersJson(o.layered)},
+                          {"single_layer_parameters", parametersJson(o.single)}};
+    if (o.diagnosis) {
+      const auto& d = *o.diagnosis;
+      std::printf("diagnosis: %s (%s), %.0f s\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str(), o.diagnosis_wall_s);
+      doc["diagnosis"] = campaign::toJson(d, diagnosis, "");
+      doc["diagnosis_wall_s"] = o.diagnosis_wall_s;
+    }
+    cli::writeJson(json_target, doc);
+  });
+  return cli::runApp(app, argc, argv);
+}

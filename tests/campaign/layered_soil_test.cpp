@@ -1,0 +1,52 @@
+// Soil calibration and diagnosis against an independent engine (docs/calibration.md, "Soil against
+// LIGGGHTS"; docs/diagnosis.md): recordings of a two-layer bin (friction 0.2 above, 0.9 below 25 mm)
+// simulated by LIGGGHTS itself from the deck kept with the test, three seeds, three depths; the
+// built-in model (rigid plate, draught) is calibrated and diagnosed against them. One test case:
+// the LIGGGHTS runs are made once.
+#include "layered_soil_study.hpp"
+#include "weight_drop_fixture.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+
+using namespace demfem;
+
+TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth, one shallow layer under-predicts the deepest, "
+          "diagnose names layered_soil",
+          "[campaign][physics]") {
+  const campaign::test::TempDir dir("layered-soil");
+  ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
+  const campaign::test::LayeredBin bin;
+  const auto files = campaign::test::runLayeredBin(bin, dir.path() / "liggghts");
+  const auto recordings = analysis::readRecordings(std::vector<std::filesystem::path>(files.begin(), files.end()));
+  REQUIRE(recordings.size() == 9);
+
+  const auto options = campaign::test::layeredSoilOptions(bin, 15, 12, dir.path() / "runs");
+  campaign::DiagnosisSettings diagnosis;
+  diagnosis.calibration = options;
+  const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, &diagnosis);
+
+  REQUIRE(outcome.depths.size() == 3);
+  const auto& shallow = outcome.depths.front();
+  const auto& deep = outcome.depths.back();
+  for (const auto& d : outcome.depths)
+    WARN(d.depth_mm << " mm: LIGGGHTS " << d.liggghts_mean_N << " +- " << d.liggghts_sd_N << " N (3 seeds), layered-soil preset "
+                    << d.calibrated_N << " N, one layer fitted at " << shallow.depth_mm << " mm " << d.single_layer_N << " N");
+  // The truth: friction growing with depth; the deepest draught is several times the shallowest.
+  CHECK(deep.liggghts_mean_N > 3 * shallow.liggghts_mean_N);
+  REQUIRE(outcome.layered.stages.size() == 2);  // 12 mm: the top layer, 30 mm: the bottom layer; 45 mm adds none
+  for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated_N - d.liggghts_mean_N) <= d.liggghts_sd_N);
+  // One layer fitted at the shallowest depth (the paper's Section 2.10.2 finding: about 30 % low).
+  CHECK(std::abs(shallow.single_layer_N - shallow.liggghts_mean_N) <= shallow.liggghts_sd_N);
+  CHECK(deep.single_layer_N < 0.8 * deep.liggghts_mean_N);
+  CHECK(deep.liggghts_mean_N - deep.single_layer_N > 2 * deep.liggghts_sd_N);
+
+  REQUIRE(outcome.diagnosis);
+  const auto& d = *outcome.diagnosis;
+  WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason);
+  REQUIRE(d.cause);
+  CHECK(*d.cause == "layered_soil");
+  CHECK(d.ranking.front().held_out);
+  CHECK(d.gain_percent >= 50);
+}
