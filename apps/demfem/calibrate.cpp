@@ -26,8 +26,7 @@ struct CalibrateOptions {
   std::vector<std::string> fits;
   std::string preset;
   campaign::CalibrationOptions calibration;
-  campaign::SoilForce soil_force = campaign::SoilForce::LoadCell;
-  bool full_stroke = false;
+  SoilModelOptions soil;
   bool quiet = false;
 };
 
@@ -61,7 +60,7 @@ void run(CalibrateOptions& o, const std::string& json_target) {
   c.objective.soil_deformation = study.kind != study::StudyKind::DemOnly && study.tools.front().fem.deformable;
   c.kind = study.kind == study::StudyKind::WeightDrop ? campaign::ObjectiveKind::Smooth : campaign::ObjectiveKind::Noisy;
   if (c.kind == campaign::ObjectiveKind::Noisy) campaign::useNoisySteps(c);
-  c.stroke_ends_with_window = !o.full_stroke;
+  c.stroke_ends_with_window = !o.soil.full_stroke;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
   Progress progress("calibrate", !o.quiet);
   c.on_progress = [&progress](const campaign::CalibrationProgress& p) {
@@ -73,7 +72,8 @@ void run(CalibrateOptions& o, const std::string& json_target) {
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   c.stop_requested = [] { return g_stop.load(); };
-  const auto model = campaign::makeModel(study, o.soil_force);
+  useSoilDirectory(o.soil, c.cache_dir);
+  const auto model = campaign::makeModel(study, o.soil.force, o.soil.shared_packing);
   const auto result = campaign::calibrateStages(study_json, o.study_file, recordings, stages, *model, c);
   progress.finish();
 
@@ -116,7 +116,7 @@ void addCalibrateCommand(CLI::App& app) {
   cmd->add_option("--relative-floor", o->calibration.objective.relative_floor, "Smallest scatter, relative to the measured value")
       ->check(CLI::Range(1e-9, 1.0))
       ->capture_default_str();
-  addSoilModelOptions(*cmd, o->soil_force, o->full_stroke);
+  addSoilModelOptions(*cmd, o->soil);
   cmd->add_flag("--quiet", o->quiet, "No progress on stderr");
   addAnalysisOptions(*cmd, o->analysis);
   std::string& json_target = addJsonOption(*cmd);

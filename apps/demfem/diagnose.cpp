@@ -23,8 +23,7 @@ struct DiagnoseOptions {
   std::string study_file;
   std::vector<std::string> recordings;
   campaign::DiagnosisSettings settings;
-  campaign::SoilForce soil_force = campaign::SoilForce::LoadCell;
-  bool full_stroke = false;
+  SoilModelOptions soil;
   bool x_tolerance_given = false;
   bool quiet = false;
 };
@@ -45,7 +44,7 @@ void run(DiagnoseOptions& o, const std::string& json_target) {
   c.objective.soil_deformation = study.kind != study::StudyKind::DemOnly && study.tools.front().fem.deformable;
   c.kind = study.kind == study::StudyKind::WeightDrop ? campaign::ObjectiveKind::Smooth : campaign::ObjectiveKind::Noisy;
   if (c.kind == campaign::ObjectiveKind::Noisy && !o.x_tolerance_given) campaign::useNoisySteps(c);
-  c.stroke_ends_with_window = !o.full_stroke;
+  c.stroke_ends_with_window = !o.soil.full_stroke;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
   const auto start = std::chrono::steady_clock::now();
   if (!o.quiet)
@@ -56,7 +55,8 @@ void run(DiagnoseOptions& o, const std::string& json_target) {
   std::signal(SIGINT, onDiagnoseStop);
   std::signal(SIGTERM, onDiagnoseStop);
   c.stop_requested = [] { return g_stop.load(); };
-  const auto model = campaign::makeModel(study, o.soil_force);
+  useSoilDirectory(o.soil, c.cache_dir);
+  const auto model = campaign::makeModel(study, o.soil.force, o.soil.shared_packing);
   const campaign::Diagnosis d = campaign::diagnose(study_json, o.study_file, recordings, *model, o.settings);
 
   analysis::StagedOutput out(o.analysis.out_dir);
@@ -106,7 +106,7 @@ void addDiagnoseCommand(CLI::App& app) {
                           ->check(CLI::Range(1e-9, 0.1))
                           ->capture_default_str();
   cmd->add_option("--jobs", s.calibration.jobs, "Cases run concurrently")->check(CLI::PositiveNumber)->capture_default_str();
-  addSoilModelOptions(*cmd, o->soil_force, o->full_stroke);
+  addSoilModelOptions(*cmd, o->soil);
   cmd->add_flag("--quiet", o->quiet, "No progress on stderr");
   addAnalysisOptions(*cmd, o->analysis);
   std::string& json_target = addJsonOption(*cmd);

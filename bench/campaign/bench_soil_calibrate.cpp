@@ -78,12 +78,13 @@ int main(int argc, char** argv) {
     const auto o = campaign::test::runLayeredSoil(bin, recordings, options, no_diagnosis ? nullptr : &diagnosis);
 
     nlohmann::json depths = nlohmann::json::array();
-    std::printf("%-8s %22s %14s %14s\n", "depth", "LIGGGHTS draught (N)", "two layers", "one layer");
+    std::printf("%-8s %20s %20s %20s\n", "depth", "LIGGGHTS draught (N)", "two layers (N)", "one layer (N)");
+    const auto seedJson = [](const campaign::test::SeedMean& m) { return nlohmann::json{{"mean_N", m.mean_N}, {"sd_N", m.sd_N}}; };
     for (const auto& d : o.depths) {
-      std::printf("%5.0f mm %13.3f +- %5.3f %14.3f %14.3f\n", d.depth_mm, d.liggghts_mean_N, d.liggghts_sd_N, d.calibrated_N,
-                  d.single_layer_N);
-      depths.push_back({{"depth_mm", d.depth_mm}, {"liggghts_mean_N", d.liggghts_mean_N}, {"liggghts_sd_N", d.liggghts_sd_N},
-                        {"calibrated_N", d.calibrated_N}, {"single_layer_N", d.single_layer_N}});
+      std::printf("%5.0f mm %12.3f +- %5.3f %12.3f +- %5.3f %12.3f +- %5.3f\n", d.depth_mm, d.liggghts.mean_N, d.liggghts.sd_N, d.calibrated.mean_N,
+                  d.calibrated.sd_N, d.single_layer.mean_N, d.single_layer.sd_N);
+      depths.push_back({{"depth_mm", d.depth_mm}, {"liggghts", seedJson(d.liggghts)}, {"calibrated", seedJson(d.calibrated)},
+                        {"single_layer", seedJson(d.single_layer)}});
     }
     std::printf("LIGGGHTS runs: %.0f s; layered-soil calibration + prediction: %.0f s; single layer: %.0f s\n", liggghts_s, o.layered_wall_s,
                 o.single_wall_s);

@@ -3,6 +3,7 @@
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/adapter/tool_drive.hpp"
 #include "demfem/backends/builtin/backend.hpp"
+#include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/campaign/parameters.hpp"
 #include "demfem/fem/coupled_driver.hpp"
 #include "demfem/study/tool_motion.hpp"
@@ -96,6 +97,7 @@ analysis::Recording draughtRun(const study::Study& study) {
 }  // namespace
 
 analysis::Recording SoilBinModel::run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) {
+  prepareSoil(study);
   analysis::Recording recording;
   switch (force_) {
     case SoilForce::LoadCell: recording = loadCellRun(study, scratch); break;
@@ -106,29 +108,51 @@ analysis::Recording SoilBinModel::run(const study::Study& study, const analysis:
 }
 
 std::string SoilBinModel::name() const {
+  const std::string packing = packing_ ? "-packing-" + study::soilHash(*packing_) : "";
   switch (force_) {
-    case SoilForce::LoadCell: return "coupled-builtin-1";
-    case SoilForce::Draught: return "dem-draught-builtin-1";
+    case SoilForce::LoadCell: return "coupled-builtin-1" + packing;
+    case SoilForce::Draught: return "dem-draught-builtin-1" + packing;
   }
   return {};
 }
 
 void SoilBinModel::prepare(const std::vector<study::Study>& case_studies) {
-  std::set<std::filesystem::path> done;
-  for (const study::Study& s : case_studies) {
-    const auto file = adapter::settledSoilFile(s, adapter::defaultSoilDirectory());
-    if (std::filesystem::exists(file) || !done.insert(file).second) continue;
-    builtin::makeBackend(s);  // deposits the soil and writes its file (backend.hpp)
-  }
+  std::set<std::string> done;
+  for (const study::Study& s : case_studies)
+    if (done.insert(study::soilHash(s)).second) prepareSoil(s);
 }
 
-std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force) {
+void SoilBinModel::prepareSoil(const study::Study& s) const {
+  const auto dir = adapter::defaultSoilDirectory();
+  const auto file = adapter::settledSoilFile(s, dir);
+  if (std::filesystem::exists(file)) return;
+  if (!packing_) {
+    builtin::makeBackend(s);  // deposits the soil and writes its file (backend.hpp)
+    return;
+  }
+  study::Study reference = *packing_;
+  reference.soil.deposition_seed = s.soil.deposition_seed;
+  const auto& a = reference.soil;
+  const auto& b = s.soil;
+  if (a.bin_length_m != b.bin_length_m || a.bin_width_m != b.bin_width_m || a.fill_height_m != b.fill_height_m ||
+      a.diameter_min_m != b.diameter_min_m || a.diameter_max_m != b.diameter_max_m)
+    throw ArgumentError("shared soil packing: study '" + s.name + "' changes the bin, fill height or particle sizes of '" + reference.name +
+                        "', whose deposition it would reuse");
+  const auto reference_file = adapter::settledSoilFile(reference, dir);
+  if (!std::filesystem::exists(reference_file)) builtin::makeBackend(reference);  // deposits and writes it
+  adapter::SettledSoil soil = adapter::readSettledSoil(reference_file, reference);
+  soil.soil_hash = study::soilHash(s);
+  for (auto& p : soil.particles) p.layer = builtin::layerAt(s.soil, p.x_m[1]);
+  adapter::writeSettledSoil(file, soil);
+}
+
+std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force, bool shared_packing) {
   switch (study.kind) {
     case study::StudyKind::WeightDrop:
       return std::make_unique<WeightDropModel>();
     case study::StudyKind::Coupled:
     case study::StudyKind::DemOnly:
-      return std::make_unique<SoilBinModel>(soil_force);
+      return std::make_unique<SoilBinModel>(soil_force, shared_packing ? std::optional(study) : std::nullopt);
     case study::StudyKind::ConePenetration:
     case study::StudyKind::FemOnly:
       break;

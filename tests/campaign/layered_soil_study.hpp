@@ -6,8 +6,9 @@
 //     recordings only, then its prediction of every depth;
 //  3. optionally `demfem diagnose` of the recordings with the single-layer study.
 // The built-in model records the draught of the rigid plate (campaign::SoilForce::Draught), like
-// the deck. Per depth: the LIGGGHTS seeds' window means (mean, sample standard deviation) against
-// both predictions. Wall times measured around each step.
+// the deck, and packs its soils from the deposition of the study each step starts from (shared
+// packing, campaign/model.hpp). Per depth: the LIGGGHTS seeds' window means (mean, sample standard deviation) against
+// both predictions at the same seeds. Wall times measured around each step.
 #pragma once
 
 #include "liggghts_layered_bin.hpp"
@@ -22,11 +23,17 @@
 
 namespace demfem::campaign::test {
 
+// Window mean of the draught over the seeds (the same seeds 1..n on both engines): mean and sample
+// standard deviation.
+struct SeedMean {
+  double mean_N = 0, sd_N = 0;
+};
+
 struct DepthFigures {
   double depth_mm = 0;
-  double liggghts_mean_N = 0, liggghts_sd_N = 0;  // window mean of the draught over the seeds
-  double calibrated_N = 0;                        // two layers, --preset layered-soil
-  double single_layer_N = 0;                      // one layer fitted at the shallowest depth
+  SeedMean liggghts;
+  SeedMean calibrated;    // two layers, --preset layered-soil
+  SeedMean single_layer;  // one layer fitted at the shallowest depth
 };
 
 struct LayeredSoilOutcome {
@@ -61,10 +68,29 @@ inline CalibrationOptions layeredSoilOptions(const LayeredBin& bin, double windo
 
 namespace detail {
 
-inline double windowMean(const std::vector<Residual>& residuals, double depth_mm) {
-  for (const auto& r : residuals)
-    if (r.key.depth_mm == depth_mm && r.quantity == "window_mean_force_N") return r.simulated;
-  return std::nan("");
+inline SeedMean seedMean(const std::vector<double>& values) {
+  SeedMean m;
+  for (double v : values) m.mean_N += v / static_cast<double>(values.size());
+  double ss = 0;
+  for (double v : values) ss += (v - m.mean_N) * (v - m.mean_N);
+  m.sd_N = values.size() > 1 ? std::sqrt(ss / static_cast<double>(values.size() - 1)) : 0.0;
+  return m;
+}
+
+// The study's prediction of every depth at deposition seeds 1..seeds, per depth.
+inline std::map<double, SeedMean> predictSeeds(const nlohmann::ordered_json& study, const std::string& origin,
+                                               const std::vector<analysis::Recording>& recordings, Model& model,
+                                               const CalibrationOptions& options, int seeds) {
+  std::map<double, std::vector<double>> values;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    nlohmann::ordered_json s = study;
+    s["soil"]["deposition"]["seed"] = seed;
+    for (const auto& r : predict(s, origin, recordings, model, options))
+      if (r.quantity == "window_mean_force_N") values[r.key.depth_mm].push_back(r.simulated);
+  }
+  std::map<double, SeedMean> out;
+  for (const auto& [depth, v] : values) out[depth] = seedMean(v);
+  return out;
 }
 
 inline double secondsSince(std::chrono::steady_clock::time_point t) {
@@ -76,7 +102,9 @@ inline double secondsSince(std::chrono::steady_clock::time_point t) {
 inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vector<analysis::Recording>& recordings,
                                          const CalibrationOptions& options, const DiagnosisSettings* diagnosis) {
   LayeredSoilOutcome out;
-  SoilBinModel model(SoilForce::Draught);
+  const auto modelOf = [](const nlohmann::ordered_json& study, const std::string& origin) {
+    return SoilBinModel(SoilForce::Draught, study::parseStudy(study.dump(), origin));
+  };
   std::map<double, std::vector<double>> seeds;
   for (const auto& r : recordings)
     for (const auto& q : quantities({r}, options.objective, false))
@@ -84,9 +112,11 @@ inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vecto
 
   const std::string layered_file = fixtureData("layered_bin.json").string();
   const auto layered = builtinStudy(bin, layered_file);
+  SoilBinModel layered_model = modelOf(layered, layered_file);
   auto t = std::chrono::steady_clock::now();
-  out.layered = calibrateStages(layered, layered_file, recordings, layeredSoilPreset(layered, layered_file, recordings), model, options);
-  const auto calibrated = predict(out.layered.calibrated_study, layered_file, recordings, model, options);
+  out.layered = calibrateStages(layered, layered_file, recordings, layeredSoilPreset(layered, layered_file, recordings), layered_model,
+                                options);
+  const auto calibrated = detail::predictSeeds(out.layered.calibrated_study, layered_file, recordings, layered_model, options, bin.seeds);
   out.layered_wall_s = detail::secondsSince(t);
 
   const std::string single_file = fixtureData("single_layer_bin.json").string();
@@ -94,25 +124,16 @@ inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vecto
   std::vector<analysis::Recording> shallow;
   for (const auto& r : recordings)
     if (r.key.depth_mm == seeds.begin()->first) shallow.push_back(r);
+  SoilBinModel single_model = modelOf(single, single_file);
   t = std::chrono::steady_clock::now();
-  out.single = calibrateStages(single, single_file, shallow, layeredSoilPreset(single, single_file, shallow), model, options);
-  const auto single_layer = predict(out.single.calibrated_study, single_file, recordings, model, options);
+  out.single = calibrateStages(single, single_file, shallow, layeredSoilPreset(single, single_file, shallow), single_model, options);
+  const auto single_layer = detail::predictSeeds(out.single.calibrated_study, single_file, recordings, single_model, options, bin.seeds);
   out.single_wall_s = detail::secondsSince(t);
 
-  for (const auto& [depth, values] : seeds) {
-    DepthFigures d;
-    d.depth_mm = depth;
-    for (double v : values) d.liggghts_mean_N += v / static_cast<double>(values.size());
-    double ss = 0;
-    for (double v : values) ss += (v - d.liggghts_mean_N) * (v - d.liggghts_mean_N);
-    d.liggghts_sd_N = values.size() > 1 ? std::sqrt(ss / static_cast<double>(values.size() - 1)) : 0.0;
-    d.calibrated_N = detail::windowMean(calibrated, depth);
-    d.single_layer_N = detail::windowMean(single_layer, depth);
-    out.depths.push_back(d);
-  }
+  for (const auto& [depth, values] : seeds) out.depths.push_back({depth, detail::seedMean(values), calibrated.at(depth), single_layer.at(depth)});
   if (diagnosis) {
     t = std::chrono::steady_clock::now();
-    out.diagnosis = diagnose(single, single_file, recordings, model, *diagnosis);
+    out.diagnosis = diagnose(single, single_file, recordings, single_model, *diagnosis);
     out.diagnosis_wall_s = detail::secondsSince(t);
   }
   return out;

@@ -31,16 +31,19 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   const auto& shallow = outcome.depths.front();
   const auto& deep = outcome.depths.back();
   for (const auto& d : outcome.depths)
-    WARN(d.depth_mm << " mm: LIGGGHTS " << d.liggghts_mean_N << " +- " << d.liggghts_sd_N << " N (3 seeds), layered-soil preset "
-                    << d.calibrated_N << " N, one layer fitted at " << shallow.depth_mm << " mm " << d.single_layer_N << " N");
+    WARN(d.depth_mm << " mm, window mean of 3 seeds: LIGGGHTS " << d.liggghts.mean_N << " +- " << d.liggghts.sd_N
+                    << " N, layered-soil preset " << d.calibrated.mean_N << " +- " << d.calibrated.sd_N << " N, one layer fitted at "
+                    << shallow.depth_mm << " mm " << d.single_layer.mean_N << " +- " << d.single_layer.sd_N << " N");
   // The truth: friction growing with depth; the deepest draught is several times the shallowest.
-  CHECK(deep.liggghts_mean_N > 3 * shallow.liggghts_mean_N);
+  CHECK(deep.liggghts.mean_N > 3 * shallow.liggghts.mean_N);
   REQUIRE(outcome.layered.stages.size() == 2);  // 12 mm: the top layer, 30 mm: the bottom layer; 45 mm adds none
-  for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated_N - d.liggghts_mean_N) <= d.liggghts_sd_N);
+  // Within the LIGGGHTS seed scatter: the two 3-seed means differ by less than two standard
+  // deviations of a LIGGGHTS seed (a perfect model fails this about once in 200 per depth).
+  for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated.mean_N - d.liggghts.mean_N) <= 2 * d.liggghts.sd_N);
   // One layer fitted at the shallowest depth (the paper's Section 2.10.2 finding: about 30 % low).
-  CHECK(std::abs(shallow.single_layer_N - shallow.liggghts_mean_N) <= shallow.liggghts_sd_N);
-  CHECK(deep.single_layer_N < 0.8 * deep.liggghts_mean_N);
-  CHECK(deep.liggghts_mean_N - deep.single_layer_N > 2 * deep.liggghts_sd_N);
+  CHECK(std::abs(shallow.single_layer.mean_N - shallow.liggghts.mean_N) <= 2 * shallow.liggghts.sd_N);
+  CHECK(deep.single_layer.mean_N < 0.8 * deep.liggghts.mean_N);
+  CHECK(deep.liggghts.mean_N - deep.single_layer.mean_N > 2 * deep.liggghts.sd_N);
 
   REQUIRE(outcome.diagnosis);
   const auto& d = *outcome.diagnosis;

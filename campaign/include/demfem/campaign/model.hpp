@@ -31,7 +31,16 @@
 //     soil-bin DEM simulation reports (docs/calibration.md, "Soil against LIGGGHTS").
 //   prepare() makes each case soil's settled-soil file (adapter/settled_soil.hpp, in
 //   adapter::defaultSoilDirectory()) once, before the cases of one evaluation run concurrently: one
-//   deposition serves every depth of one soil (the depth is not part of the soil hash).
+//   deposition serves every depth of one soil (the depth is not part of the soil hash). Packing:
+//   * per soil (no packing study): the case study's own deposition (friction enters the packing, so
+//     every new friction value is a new deposition);
+//   * shared (a packing study, normally the study the command was given): the case soil's file
+//     holds the particles of the packing study's deposition at the case's seed, each tagged with
+//     the case study's layer at its depth (builtin::layerAt): one deposition per seed for a whole
+//     calibration, and every parameter value drags through the same packing (common random
+//     numbers: the objective's noise between neighbouring values is the drag's, not another
+//     packing's). The packing study's soil hash is part of name(). Bin, fill height and particle
+//     sizes must be the packing study's (ArgumentError otherwise).
 #pragma once
 
 #include "demfem/analysis/recording.hpp"
@@ -89,18 +98,22 @@ enum class SoilForce { LoadCell, Draught };
 
 class SoilBinModel final : public Model {
  public:
-  explicit SoilBinModel(SoilForce force = SoilForce::LoadCell) : force_(force) {}
+  explicit SoilBinModel(SoilForce force = SoilForce::LoadCell, std::optional<study::Study> packing = std::nullopt)
+      : force_(force), packing_(std::move(packing)) {}
   // Throws ArgumentError for SoilForce::Draught with a deformable tool.
   analysis::Recording run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) override;
   std::string name() const override;
   void prepare(const std::vector<study::Study>& case_studies) override;
 
  private:
+  void prepareSoil(const study::Study& study) const;
   SoilForce force_;
+  std::optional<study::Study> packing_;
 };
 
 // The model for the study's kind: weight-drop -> WeightDropModel, coupled / dem-only ->
-// SoilBinModel with `soil_force`. Throws ArgumentError for other kinds.
-std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force = SoilForce::LoadCell);
+// SoilBinModel with `soil_force`, its packing shared from `study` when `shared_packing`. Throws
+// ArgumentError for other kinds.
+std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force = SoilForce::LoadCell, bool shared_packing = false);
 
 }  // namespace demfem::campaign
