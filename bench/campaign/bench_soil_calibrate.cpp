@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   double window_begin_mm = 50;
   std::string out_dir = "bench-soil", recordings_dir;
   bin.seeds = 5;
-  app.add_flag("--ci-bin", ci_bin, "The physics test's bin (80 x 140 mm, 50 mm stroke, 3 seeds) instead of the small bin");
+  app.add_flag("--ci-bin", ci_bin, "The physics test's bin (100 x 140 mm, 50 mm stroke, 3 seeds) instead of the small bin");
   app.add_option("--seeds", bin.seeds, "LIGGGHTS deposition seeds (1..5)")->check(CLI::Range(1, 5))->capture_default_str();
   app.add_option("--jobs", bin.jobs, "Runs at once (LIGGGHTS processes; cases of one evaluation)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--max-evaluations", max_evaluations, "Objective evaluations per fit")->check(CLI::PositiveNumber)->capture_default_str();

@@ -1,5 +1,6 @@
 #include "demfem/campaign/calibration.hpp"
 
+#include "demfem/adapter/coupling_api.hpp"
 #include "demfem/campaign/run_cache.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -62,6 +63,7 @@ class Evaluator {
     if (options_.stop_requested && options_.stop_requested()) throw Interrupted("calibration interrupted (finished runs are kept in the run cache)");
     Evaluation e;
     e.runs = runAll(withValues(study_, specs_, values));
+    std::erase_if(e.runs, [](const analysis::Recording& r) { return r.size() == 0; });  // failed runs: quantities missing
     e.residuals = residuals(measured_, quantities(e.runs, options_.objective, true));
     e.chi2 = chi2(e.residuals);
     ++evaluations_;
@@ -72,6 +74,7 @@ class Evaluator {
   int evaluations() const { return evaluations_; }
   int modelRuns() const { return model_runs_; }
   int cacheHits() const { return cache_hits_; }
+  int failedRuns() const { return failed_runs_; }
   const std::vector<ParameterSpec>& specs() const { return specs_; }
 
  private:
@@ -87,6 +90,11 @@ class Evaluator {
       for (std::size_t i; (i = next++) < cases_.size();) {
         try {
           out[i] = runCase(study, cases_[i]);
+        } catch (const adapter::CouplingError& e) {
+          // A DEM run that failed (a blow-up at an extreme parameter value) scores like a run that
+          // cannot be evaluated (objective.hpp); other errors stop the calibration.
+          if (e.code() != adapter::ErrorCode::SimulationFailed) errors[i] = std::current_exception();
+          else ++failed_runs_;
         } catch (...) {
           errors[i] = std::current_exception();
         }
@@ -135,7 +143,7 @@ class Evaluator {
   fs::path scratch_;
   std::mutex mutex_;
   std::map<std::vector<double>, Evaluation> memo_;
-  std::atomic<int> evaluations_{0}, model_runs_{0}, cache_hits_{0};
+  std::atomic<int> evaluations_{0}, model_runs_{0}, cache_hits_{0}, failed_runs_{0};
 };
 
 std::vector<double> valuesOf(const std::vector<ParameterSpec>& specs, const std::vector<double>& x) {
@@ -337,6 +345,7 @@ CalibrationResult calibrate(const CalibrationProblem& problem, Model& model, con
   result.evaluations = evaluator.evaluations();
   result.model_runs = evaluator.modelRuns();
   result.cache_hits = evaluator.cacheHits();
+  result.failed_runs = evaluator.failedRuns();
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - begin).count();
   return result;
 }

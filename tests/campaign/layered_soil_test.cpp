@@ -22,7 +22,7 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   const auto recordings = analysis::readRecordings(std::vector<std::filesystem::path>(files.begin(), files.end()));
   REQUIRE(recordings.size() == 9);
 
-  const auto options = campaign::test::layeredSoilOptions(bin, 15, 12, dir.path() / "runs");
+  const auto options = campaign::test::layeredSoilOptions(bin, 15, 8, dir.path() / "runs");
   campaign::DiagnosisSettings diagnosis;
   diagnosis.calibration = options;
   const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, &diagnosis);
@@ -37,13 +37,17 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   // The truth: friction growing with depth; the deepest draught is several times the shallowest.
   CHECK(deep.liggghts.mean_N > 3 * shallow.liggghts.mean_N);
   REQUIRE(outcome.layered.stages.size() == 2);  // 12 mm: the top layer, 30 mm: the bottom layer; 45 mm adds none
-  // Within the LIGGGHTS seed scatter: the two 3-seed means differ by less than two standard
-  // deviations of a LIGGGHTS seed (a perfect model fails this about once in 200 per depth).
-  for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated.mean_N - d.liggghts.mean_N) <= 2 * d.liggghts.sd_N);
+  // Within the seed scatter: the two 3-seed means differ by less than two standard errors of their
+  // difference, sqrt((sd_LIGGGHTS^2 + sd_builtin^2) / 3) from both engines' seed scatter (a model
+  // that matches LIGGGHTS fails this about once in twenty per depth).
+  const auto within = [](const campaign::test::SeedMean& a, const campaign::test::SeedMean& b) {
+    return 2 * std::sqrt((a.sd_N * a.sd_N + b.sd_N * b.sd_N) / 3);
+  };
+  for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated.mean_N - d.liggghts.mean_N) <= within(d.calibrated, d.liggghts));
   // One layer fitted at the shallowest depth (the paper's Section 2.10.2 finding: about 30 % low).
-  CHECK(std::abs(shallow.single_layer.mean_N - shallow.liggghts.mean_N) <= 2 * shallow.liggghts.sd_N);
+  CHECK(std::abs(shallow.single_layer.mean_N - shallow.liggghts.mean_N) <= within(shallow.single_layer, shallow.liggghts));
   CHECK(deep.single_layer.mean_N < 0.8 * deep.liggghts.mean_N);
-  CHECK(deep.liggghts.mean_N - deep.single_layer.mean_N > 2 * deep.liggghts.sd_N);
+  CHECK(deep.liggghts.mean_N - deep.single_layer.mean_N > within(deep.single_layer, deep.liggghts));
 
   REQUIRE(outcome.diagnosis);
   const auto& d = *outcome.diagnosis;

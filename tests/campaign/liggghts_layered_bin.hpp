@@ -27,7 +27,7 @@
 namespace demfem::campaign::test {
 
 struct LayeredBin {
-  double width_m = 0.08, length_m = 0.14, fill_m = 0.055, interface_m = 0.025;  // interface: depth below the fill
+  double width_m = 0.1, length_m = 0.14, fill_m = 0.055, interface_m = 0.025;  // interface: depth below the fill
   double start_z_m = 0.03, stroke_m = 0.05, velocity_m_s = 0.1, insertion_velocity_m_s = 0.1;
   std::vector<double> depths_mm{12, 30, 45};
   int seeds = 3;  // 1..seeds (at most 5)

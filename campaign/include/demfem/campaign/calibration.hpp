@@ -15,7 +15,10 @@
 //   per start. Cases of one evaluation run concurrently on `jobs` threads, after Model::prepare()
 //   with the studies of those of them not in the run cache.
 // - Every model run goes through the RunCache in `cache_dir` (empty = none): a repeated or resumed
-//   calibration reruns nothing already run.
+//   calibration reruns nothing already run. A run that fails with adapter::CouplingError
+//   SimulationFailed (a DEM blow-up at an extreme value) is not cached, is counted in failed_runs
+//   and its case's quantities are missing from that evaluation (scored as objective.hpp says);
+//   every other failure is thrown.
 // - Uncertainty: local curvature. The Gauss-Newton Hessian H = 2 J^T J of chi2 in optimiser
 //   coordinates from central differences of the residuals (step `curvature_step`); covariance
 //   2 H^-1 (Delta chi2 = 1 at one standard deviation); converted to file units (log parameters:
@@ -116,6 +119,7 @@ struct CalibrationResult {
   int evaluations = 0;                      // objective evaluations
   int model_runs = 0;                       // runs computed (not found in the cache)
   int cache_hits = 0;
+  int failed_runs = 0;                      // DEM runs that failed (SimulationFailed): scored as missing quantities
   double wall_time_s = 0;
   // Measured recordings, and the model's recordings at the fit and at the start, per case (plots).
   std::vector<analysis::Recording> measured;
