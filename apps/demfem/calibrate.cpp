@@ -62,6 +62,7 @@ void run(CalibrateOptions& o, const std::string& json_target) {
   c.kind = study.kind == study::StudyKind::WeightDrop ? campaign::ObjectiveKind::Smooth : campaign::ObjectiveKind::Noisy;
   if (c.kind == campaign::ObjectiveKind::Noisy) campaign::useNoisySteps(c);
   c.stroke_ends_with_window = !o.soil.full_stroke;
+  c.model_seeds = o.soil.model_seeds;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
   Progress progress("calibrate", !o.quiet);
   c.on_progress = [&progress](const campaign::CalibrationProgress& p) {

@@ -46,6 +46,7 @@ void run(DiagnoseOptions& o, const std::string& json_target) {
   c.kind = study.kind == study::StudyKind::WeightDrop ? campaign::ObjectiveKind::Smooth : campaign::ObjectiveKind::Noisy;
   if (c.kind == campaign::ObjectiveKind::Noisy && !o.x_tolerance_given) campaign::useNoisySteps(c);
   c.stroke_ends_with_window = !o.soil.full_stroke;
+  c.model_seeds = o.soil.model_seeds;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
   const auto start = std::chrono::steady_clock::now();
   if (!o.quiet)

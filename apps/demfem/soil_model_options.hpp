@@ -19,6 +19,7 @@ struct SoilModelOptions {
   campaign::SoilForce force = campaign::SoilForce::LoadCell;
   bool shared_packing = true;
   bool full_stroke = false;
+  int model_seeds = 1;
 };
 
 inline void addSoilModelOptions(CLI::App& cmd, SoilModelOptions& o) {
@@ -35,6 +36,10 @@ inline void addSoilModelOptions(CLI::App& cmd, SoilModelOptions& o) {
                  "OUT/runs/soil); per-soil: each parameter value deposits its own soil")
       ->transform(CLI::CheckedTransformer(packings))
       ->default_str("shared");
+  cmd.add_option("--model-seeds", o.model_seeds,
+                 "Deposition seeds each soil-bin case runs at (the study's and the next ones), pooled like measured repeats")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd.add_flag("--full-stroke", o.full_stroke,
                "Run every soil-bin case over the study's whole stroke (default: the stroke ends with the statistics window)");
 }

@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   app.name("demfem-bench-soil-calibrate");
   campaign::test::LayeredBin bin;
   bool ci_bin = false, no_diagnosis = false;
-  int max_evaluations = 12;
+  int max_evaluations = 12, model_seeds = 3;
   double window_begin_mm = 50;
   std::string out_dir = "bench-soil", recordings_dir;
   bin.seeds = 5;
@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", bin.seeds, "LIGGGHTS deposition seeds (1..5)")->check(CLI::Range(1, 5))->capture_default_str();
   app.add_option("--jobs", bin.jobs, "Runs at once (LIGGGHTS processes; cases of one evaluation)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--max-evaluations", max_evaluations, "Objective evaluations per fit")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--model-seeds", model_seeds, "Deposition seeds each built-in case runs at")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--window-begin-mm", window_begin_mm, "Start of the statistics window (it ends with the stroke)")->capture_default_str();
   app.add_option("--out", out_dir, "Working directory (LIGGGHTS runs, soils, run cache)")->capture_default_str();
   app.add_option("--recordings", recordings_dir, "Use the LIGGGHTS recordings of an earlier run in this directory instead of running LIGGGHTS")
@@ -68,7 +69,7 @@ int main(int argc, char** argv) {
       files.push_back(recordings_dir);
     }
     const auto recordings = analysis::readRecordings(files);
-    const auto options = campaign::test::layeredSoilOptions(bin, window_begin_mm, max_evaluations, out / "runs");
+    const auto options = campaign::test::layeredSoilOptions(bin, window_begin_mm, max_evaluations, out / "runs", model_seeds);
     campaign::DiagnosisSettings diagnosis;
     diagnosis.calibration = options;
     diagnosis.on_stage = [start = Clock::now()](const std::string& stage) {
@@ -93,6 +94,7 @@ int main(int argc, char** argv) {
                           {"bin_mm", {bin.width_m * 1000, bin.length_m * 1000, bin.fill_m * 1000}},
                           {"window_begin_mm", window_begin_mm},
                           {"max_evaluations", max_evaluations},
+                          {"model_seeds", model_seeds},
                           {"jobs", bin.jobs},
                           {"depths", depths},
                           {"liggghts_wall_s", liggghts_s},

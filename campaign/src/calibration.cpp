@@ -78,18 +78,38 @@ class Evaluator {
   const std::vector<ParameterSpec>& specs() const { return specs_; }
 
  private:
+  // The study of each model seed: the study itself, or with model_seeds > 1 for a soil study its
+  // deposition seeds s0 .. s0 + model_seeds - 1 (s0 the study's).
+  std::vector<nlohmann::ordered_json> seedVariants(const nlohmann::ordered_json& study) const {
+    if (options_.model_seeds <= 1 || !study.contains("soil")) return {study};
+    const auto seed = nlohmann::ordered_json::json_pointer("/soil/deposition/seed");
+    const std::uint64_t s0 = study.contains(seed) ? study.at(seed).get<std::uint64_t>() : 1;
+    std::vector<nlohmann::ordered_json> out;
+    for (int k = 0; k < options_.model_seeds; ++k) {
+      out.push_back(study);
+      out.back()[seed] = s0 + static_cast<std::uint64_t>(k);
+    }
+    return out;
+  }
+
+  // Every case at every model seed; the runs of one case are pooled like measured repeats.
   std::vector<analysis::Recording> runAll(const nlohmann::ordered_json& study) {
-    std::vector<study::Study> to_run;
+    const std::vector<nlohmann::ordered_json> variants = seedVariants(study);
+    std::vector<std::pair<const nlohmann::ordered_json*, const analysis::CaseKey*>> items;
     for (const auto& key : cases_)
-      if (study::Study s = studyOf(study, key); !cache_ || !cache_->find(model_.name(), s, key)) to_run.push_back(std::move(s));
+      for (const auto& v : variants) items.emplace_back(&v, &key);
+    std::vector<study::Study> to_run;
+    for (const auto& [v, key] : items)
+      if (study::Study s = studyOf(*v, *key); !cache_ || !cache_->find(model_.name(), s, *key)) to_run.push_back(std::move(s));
     if (!to_run.empty()) model_.prepare(to_run);
-    std::vector<analysis::Recording> out(cases_.size());
-    std::vector<std::exception_ptr> errors(cases_.size());
+    std::vector<analysis::Recording> out(items.size());
+    std::vector<std::exception_ptr> errors(items.size());
     std::atomic<std::size_t> next{0};
     const auto worker = [&] {
-      for (std::size_t i; (i = next++) < cases_.size();) {
+      for (std::size_t i; (i = next++) < items.size();) {
         try {
-          out[i] = runCase(study, cases_[i]);
+          out[i] = runCase(*items[i].first, *items[i].second);
+          out[i].repeat = static_cast<int>(i % variants.size()) + 1;  // the model seed's repeat number
         } catch (const adapter::CouplingError& e) {
           // A DEM run that failed (a blow-up at an extreme parameter value) scores like a run that
           // cannot be evaluated (objective.hpp); other errors stop the calibration.
@@ -100,7 +120,7 @@ class Evaluator {
         }
       }
     };
-    const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(std::max(1, options_.jobs)), cases_.size());
+    const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(std::max(1, options_.jobs)), items.size());
     std::vector<std::thread> pool;
     for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
     worker();

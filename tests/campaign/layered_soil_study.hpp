@@ -49,9 +49,10 @@ inline std::filesystem::path fixtureData(const std::string& name) {
 }
 
 // The objective and optimiser of the soil runs: window from `window_begin_mm` to the stroke's end,
-// no deformation (rigid), one start, the noisy-objective steps, the stroke ending with the window.
+// no deformation (rigid), one start, the noisy-objective steps, the stroke ending with the window,
+// each case at `model_seeds` deposition seeds.
 inline CalibrationOptions layeredSoilOptions(const LayeredBin& bin, double window_begin_mm, int max_evaluations,
-                                             const std::filesystem::path& cache_dir) {
+                                             const std::filesystem::path& cache_dir, int model_seeds) {
   CalibrationOptions o;
   o.objective.analysis.evaluation.window_begin_mm = window_begin_mm;
   o.objective.analysis.evaluation.window_end_mm = bin.stroke_m * 1000;
@@ -62,6 +63,7 @@ inline CalibrationOptions layeredSoilOptions(const LayeredBin& bin, double windo
   useNoisySteps(o);
   o.stroke_ends_with_window = true;
   o.jobs = bin.jobs;
+  o.model_seeds = model_seeds;
   o.cache_dir = cache_dir;
   return o;
 }
@@ -85,7 +87,9 @@ inline std::map<double, SeedMean> predictSeeds(const nlohmann::ordered_json& stu
   for (int seed = 1; seed <= seeds; ++seed) {
     nlohmann::ordered_json s = study;
     s["soil"]["deposition"]["seed"] = seed;
-    for (const auto& r : predict(s, origin, recordings, model, options))
+    CalibrationOptions one_seed = options;  // the fits' runs at these seeds come from the run cache
+    one_seed.model_seeds = 1;
+    for (const auto& r : predict(s, origin, recordings, model, one_seed))
       if (r.quantity == "window_mean_force_N") values[r.key.depth_mm].push_back(r.simulated);
   }
   std::map<double, SeedMean> out;

@@ -22,9 +22,12 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   const auto recordings = analysis::readRecordings(std::vector<std::filesystem::path>(files.begin(), files.end()));
   REQUIRE(recordings.size() == 9);
 
-  const auto options = campaign::test::layeredSoilOptions(bin, 15, 8, dir.path() / "runs");
+  // Every case at the three seeds LIGGGHTS ran: the model's seed scatter averages out like the
+  // recordings' (a single seed's window mean scatters by 10-30 % on this bin).
+  const auto options = campaign::test::layeredSoilOptions(bin, 15, 8, dir.path() / "runs", 3);
   campaign::DiagnosisSettings diagnosis;
   diagnosis.calibration = options;
+  diagnosis.calibration.max_evaluations = 6;
   const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, &diagnosis);
 
   REQUIRE(outcome.depths.size() == 3);

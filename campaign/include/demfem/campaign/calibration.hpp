@@ -12,8 +12,9 @@
 //   sequence; each a local NLopt run: BOBYQA (COBYLA for one parameter) for smooth objectives
 //   (weight drops), Subplex for noisy ones (DEM, ObjectiveKind::Noisy); absolute x tolerance
 //   `x_tolerance`, initial step 0.1, at most `max_evaluations`
-//   per start. Cases of one evaluation run concurrently on `jobs` threads, after Model::prepare()
-//   with the studies of those of them not in the run cache.
+//   per start. Cases of one evaluation (each at `model_seeds` deposition seeds for a soil study)
+//   run concurrently on `jobs` threads, after Model::prepare() with the studies of those not in
+//   the run cache.
 // - Every model run goes through the RunCache in `cache_dir` (empty = none): a repeated or resumed
 //   calibration reruns nothing already run. A run that fails with adapter::CouplingError
 //   SimulationFailed (a DEM blow-up at an extreme value) is not cached, is counted in failed_runs
@@ -74,6 +75,10 @@ struct CalibrationOptions {
   // Soil-bin cases run with the stroke cut to objective.analysis.evaluation.window_end_mm when the
   // study's is longer: nothing after the window enters the objective (docs/calibration.md, "Cost").
   bool stroke_ends_with_window = false;
+  // Soil studies: each case runs at this many deposition seeds (the study's and the next ones), the
+  // runs pooled like measured repeats (objective.hpp): the model's seed scatter averages out as the
+  // measured one does.
+  int model_seeds = 1;
   std::filesystem::path cache_dir;
   std::function<void(const CalibrationProgress&)> on_progress;
   std::function<bool()> stop_requested;
