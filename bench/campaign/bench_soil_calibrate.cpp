@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
   CLI::App app{"demfem-bench-soil-calibrate: soil calibration and diagnosis of a two-layer bin against LIGGGHTS itself"};
   app.name("demfem-bench-soil-calibrate");
   campaign::test::LayeredBin bin;
-  bool ci_bin = false, no_diagnosis = false;
+  bool ci_bin = false, no_diagnosis = false, diagnosis_only = false;
+  int diagnosis_seeds = 1, diagnosis_evaluations = 6;
   int max_evaluations = 12, model_seeds = 3;
   double window_begin_mm = 50;
   std::string out_dir = "bench-soil", recordings_dir;
@@ -47,6 +48,11 @@ int main(int argc, char** argv) {
   app.add_option("--recordings", recordings_dir, "Use the LIGGGHTS recordings of an earlier run in this directory instead of running LIGGGHTS")
       ->check(CLI::ExistingDirectory);
   app.add_flag("--no-diagnosis", no_diagnosis, "Skip the diagnosis");
+  app.add_flag("--diagnosis-only", diagnosis_only, "Only the diagnosis of the single-layer study (no calibration)");
+  app.add_option("--diagnosis-seeds", diagnosis_seeds, "Model seeds of the diagnosis' runs")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--diagnosis-evaluations", diagnosis_evaluations, "Objective evaluations per fit of the diagnosis")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
     if (ci_bin) {
@@ -72,9 +78,24 @@ int main(int argc, char** argv) {
     const auto options = campaign::test::layeredSoilOptions(bin, window_begin_mm, max_evaluations, out / "runs", model_seeds);
     campaign::DiagnosisSettings diagnosis;
     diagnosis.calibration = options;
+    diagnosis.calibration.model_seeds = diagnosis_seeds;
+    diagnosis.calibration.max_evaluations = diagnosis_evaluations;
     diagnosis.on_stage = [start = Clock::now()](const std::string& stage) {
       std::fprintf(stderr, "diagnose: %s (%.0f s elapsed)\n", stage.c_str(), campaign::test::detail::secondsSince(start));
     };
+    if (diagnosis_only) {
+      const std::string single_file = campaign::test::fixtureData("single_layer_bin.json").string();
+      const auto single = campaign::test::builtinStudy(bin, single_file);
+      campaign::SoilBinModel model(campaign::SoilForce::Draught, study::parseStudy(single.dump(), single_file));
+      t = Clock::now();
+      const auto d = campaign::diagnose(single, single_file, recordings, model, diagnosis);
+      std::printf("diagnosis: %s (%s), %.0f s\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str(),
+                  campaign::test::detail::secondsSince(t));
+      cli::writeJson(json_target, {{"diagnosis", campaign::toJson(d, diagnosis, "")},
+                                   {"diagnosis_wall_s", campaign::test::detail::secondsSince(t)},
+                                   {"liggghts_wall_s", liggghts_s}});
+      return;
+    }
     std::fprintf(stderr, "calibrating (at most %d evaluations per fit)\n", max_evaluations);
     const auto o = campaign::test::runLayeredSoil(bin, recordings, options, no_diagnosis ? nullptr : &diagnosis);
 
@@ -107,6 +128,7 @@ int main(int argc, char** argv) {
       std::printf("diagnosis: %s (%s), %.0f s\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str(), o.diagnosis_wall_s);
       doc["diagnosis"] = campaign::toJson(d, diagnosis, "");
       doc["diagnosis_wall_s"] = o.diagnosis_wall_s;
+      doc["diagnosis_model_seeds"] = diagnosis_seeds;
     }
     cli::writeJson(json_target, doc);
   });

@@ -28,6 +28,7 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   campaign::DiagnosisSettings diagnosis;
   diagnosis.calibration = options;
   diagnosis.calibration.max_evaluations = 6;
+  diagnosis.calibration.model_seeds = 1;  // the diagnosis' fits of one seed each, to fit CI's time
   const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, &diagnosis);
 
   REQUIRE(outcome.depths.size() == 3);
