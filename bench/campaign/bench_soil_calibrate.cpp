@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   app.name("demfem-bench-soil-calibrate");
   campaign::test::LayeredBin bin;
   bool ci_bin = false, no_diagnosis = false, diagnosis_only = false;
-  int diagnosis_seeds = 1, diagnosis_evaluations = 6;
+  int diagnosis_seeds = 1, diagnosis_evaluations = 8;
   int max_evaluations = 12, model_seeds = 3;
   double window_begin_mm = 50;
   std::string out_dir = "bench-soil", recordings_dir;

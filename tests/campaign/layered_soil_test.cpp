@@ -27,7 +27,7 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   const auto options = campaign::test::layeredSoilOptions(bin, 15, 8, dir.path() / "runs", 3);
   campaign::DiagnosisSettings diagnosis;
   diagnosis.calibration = options;
-  diagnosis.calibration.max_evaluations = 6;
+  diagnosis.calibration.max_evaluations = 8;
   diagnosis.calibration.model_seeds = 1;  // the diagnosis' fits of one seed each, to fit CI's time
   const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, &diagnosis);
 
