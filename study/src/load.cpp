@@ -515,6 +515,7 @@ class StudyParser {
 
   void readFemSettings(ObjectReader& f) {
     if (auto v = f.quantity("dt_s", closedInterval(kMinFemStep_s, 1.0), Need::Required)) study_.fem.dt_s = *v;
+    if (auto v = f.choice("integration", detail::kFemIntegrations, Need::Optional)) study_.fem.integration = *v;
     f.finish();
   }
 

@@ -221,6 +221,7 @@ ordered_json toJson(const Study& study) {
     put(w, "duration_s", study.weight_drop->duration_s);
   }
   put(out["fem"], "dt_s", study.fem.dt_s);
+  out["fem"]["integration"] = nameOf(detail::kFemIntegrations, study.fem.integration);
   if (hasSoil(study.kind)) {
     out["dem"] = demJson(study.dem);
     ordered_json& c = out["coupling"];
