@@ -52,11 +52,11 @@ void ModalRecursion::step(const Eigen::VectorXd& mean_modal_force, State& s) con
 
 namespace {
 
-// The modes of `model` the step resolves (w dt <= kResolvedOmegaDt), at least one: Spectra's
-// lowest modes, asked for in growing numbers until one above the limit appears.
-Modes resolvedModes(const ReducedModel& model, double dt_s) {
+// The modes of `model` with w dt <= max_omega_dt, at least one: Spectra's lowest modes, asked for in
+// growing numbers until one above the limit appears.
+Modes resolvedModes(const ReducedModel& model, double dt_s, double max_omega_dt) {
   const int free_count = static_cast<int>(model.freeDofs().size());
-  const double limit_Hz = kResolvedOmegaDt / dt_s / (2 * std::numbers::pi);
+  const double limit_Hz = max_omega_dt / dt_s / (2 * std::numbers::pi);
   for (int count = std::min(8, free_count - 1);; count = std::min(2 * count, free_count - 1)) {
     Modes modes = naturalModes(model, count);
     int kept = 0;
@@ -72,14 +72,15 @@ Modes resolvedModes(const ReducedModel& model, double dt_s) {
 
 }  // namespace
 
-ModalIntegrator::ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping)
+ModalIntegrator::ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping, double max_omega_dt)
     : dofs_(model.dofCount()), free_(model.freeDofs()), cell_(model.constraints.load_cell_dofs) {
   if (!(dt_s > 0)) throw std::invalid_argument("modal integrator: dt must be > 0 s (got " + std::to_string(dt_s) + ")");
   const Eigen::MatrixXd K_ff = model.K(free_, free_);
   Eigen::LLT<Eigen::MatrixXd> K_factor(K_ff);
   if (K_factor.info() != Eigen::Success)
     throw std::invalid_argument("modal integrator: K is not positive definite on the free DOFs (tool not held?)");
-  const Modes modes = resolvedModes(model, dt_s);
+  if (!(max_omega_dt > 0)) throw std::invalid_argument("modal integrator: the resolved w dt must be > 0");
+  const Modes modes = resolvedModes(model, dt_s, max_omega_dt);
   highest_mode_Hz_ = modes.frequencies_Hz.back();
   phi_ = modes.shapes(free_, Eigen::all);
   phi_t_ = phi_.transpose();
@@ -91,8 +92,14 @@ ModalIntegrator::ModalIntegrator(const ReducedModel& model, double dt_s, Rayleig
   residual_ -= phi_ * omega2.inverse().matrix().asDiagonal() * phi_t_;
   residual_ = 0.5 * (residual_ + residual_.transpose()).eval();
   const Eigen::MatrixXd K_cf = model.K(cell_, free_), M_cf = model.M(cell_, free_);
-  cell_residual_ = K_cf * residual_;
+  cell_stiffness_ = K_cf;
+  ThreeLevelTerms<Eigen::MatrixXd> cell_terms = threeLevelTerms(M_cf, K_cf, damping, dt_s);  // Eq (6)-(8), load-cell rows
+  cell_a1_ = std::move(cell_terms.A1);
+  cell_a2_ = std::move(cell_terms.A2);
+  cell_a3_ = std::move(cell_terms.A3);
   recursion_ = std::make_unique<ModalRecursion>(omega2, K_cf * phi_, M_cf * phi_, damping, dt_s);
+  lag_a1_ = damping.alpha_s / (2 * dt_s) + 1.0 / 3;
+  lag_a3_ = damping.alpha_s / (2 * dt_s) - 1.0 / 3;
   start(Eigen::VectorXd::Zero(dofs_));
 }
 
@@ -108,19 +115,18 @@ Eigen::VectorXd ModalIntegrator::modalForce(const Eigen::VectorXd& f, std::vecto
   return g;
 }
 
-// u (Phi q plus the static correction R f) and the load-cell reactions of level i from the modal
-// state and the applied force `f` of that level.
-void ModalIntegrator::assemble(const Eigen::VectorXd& f, const std::vector<Eigen::Index>& nonzero) {
-  Eigen::VectorXd u_free = phi_ * modal_.q;
-  Eigen::VectorXd cell = modal_.reaction;
-  for (Eigen::Index i : nonzero) {
-    const double v = f(free_[static_cast<std::size_t>(i)]);
-    u_free.noalias() += v * residual_.col(i);
-    cell.noalias() += v * cell_residual_.col(i);
-  }
+// The static response R f (free DOFs) of the modes left out to the applied force `f`.
+Eigen::VectorXd ModalIntegrator::residualOf(const Eigen::VectorXd& f, const std::vector<Eigen::Index>& nonzero) const {
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(residual_.rows());
+  for (Eigen::Index i : nonzero) z.noalias() += f(free_[static_cast<std::size_t>(i)]) * residual_.col(i);
+  return z;
+}
+
+// u and the load-cell reactions of level i from the modal and residual states of that level.
+void ModalIntegrator::assemble() {
   u_ = Eigen::VectorXd::Zero(dofs_);
-  u_(free_) = u_free;
-  cell_reaction_ = cell - Eigen::VectorXd(f(cell_));  // total minus applied (Eq 10)
+  u_(free_) = phi_ * modal_.q + v_;
+  cell_reaction_ = modal_.reaction + r_ - Eigen::VectorXd(applied_(cell_));  // total minus applied (Eq 10)
 }
 
 void ModalIntegrator::start(const Eigen::VectorXd& f0) {
@@ -129,9 +135,12 @@ void ModalIntegrator::start(const Eigen::VectorXd& f0) {
   g_ = modalForce(f0, nonzero);
   g_prev_ = g_;
   modal_ = recursion_->atRest(g_);
+  z_ = residualOf(f0, nonzero);
+  z_prev_ = v_ = v_prev_ = z_;  // at rest: the static response
+  r_ = r_prev_ = cell_stiffness_ * v_;
   applied_ = f0;
   step_ = 0;
-  assemble(f0, nonzero);
+  assemble();
 }
 
 const Eigen::VectorXd& ModalIntegrator::step(const Eigen::VectorXd& applied_next) {
@@ -144,9 +153,20 @@ const Eigen::VectorXd& ModalIntegrator::step(const Eigen::VectorXd& applied_next
   recursion_->step((g_next + g_ + g_prev_) / 3, modal_);  // Eq (9) per mode, Eq (10) per load-cell DOF
   g_prev_ = std::move(g_);
   g_ = std::move(g_next);
+  Eigen::VectorXd z_next = residualOf(applied_next, nonzero);
+  // Eq (5) without inertia on the modes left out: alpha (v+ - v-) / (2 dt) + (v+ + v + v-) / 3 = R f_bar,
+  // then their share of the load-cell forces by Eq (10).
+  Eigen::VectorXd v_next = (((z_next + z_ + z_prev_) / 3 - v_ / 3 + lag_a3_ * v_prev_) / lag_a1_).eval();
+  Eigen::VectorXd r_next = 3 * (cell_a1_ * v_next - cell_a2_ * v_ - cell_a3_ * v_prev_) - r_ - r_prev_;
+  v_prev_ = std::move(v_);
+  v_ = std::move(v_next);
+  z_prev_ = std::move(z_);
+  z_ = std::move(z_next);
+  r_prev_ = std::move(r_);
+  r_ = std::move(r_next);
   applied_ = applied_next;
   ++step_;
-  assemble(applied_, nonzero);
+  assemble();
   return u_;
 }
 
@@ -157,24 +177,23 @@ Eigen::VectorXd ModalIntegrator::reactions() const {
 }
 
 SavedIntegratorState ModalIntegrator::save() const {
-  return {step_, {modal_.q, modal_.q_prev, modal_.reaction, modal_.reaction_prev, g_, g_prev_, applied_}};
+  return {step_, {modal_.q, modal_.q_prev, modal_.reaction, modal_.reaction_prev, g_, g_prev_, z_, z_prev_, v_, v_prev_, r_, r_prev_, applied_}};
 }
 
 void ModalIntegrator::restore(const SavedIntegratorState& saved) {
   const auto& v = saved.vectors;
   const Eigen::Index modes = recursion_->modeCount(), cells = static_cast<Eigen::Index>(cell_.size());
-  if (v.size() != 7 || v[0].size() != modes || v[1].size() != modes || v[2].size() != cells || v[3].size() != cells ||
-      v[4].size() != modes || v[5].size() != modes || v[6].size() != dofs_)
+  const auto n = static_cast<Eigen::Index>(free_.size());
+  const std::vector<Eigen::Index> sizes{modes, modes, cells, cells, modes, modes, n, n, n, n, cells, cells, dofs_};
+  bool matches = v.size() == sizes.size();
+  for (std::size_t i = 0; matches && i < sizes.size(); ++i) matches = v[i].size() == sizes[i];
+  if (!matches)
     throw std::invalid_argument("modal integrator restore: not the state of a modal integration of this model (" +
                                 std::to_string(modes) + " modes)");
   modal_ = {v[0], v[1], v[2], v[3]};
-  g_ = v[4];
-  g_prev_ = v[5];
-  applied_ = v[6];
+  g_ = v[4], g_prev_ = v[5], z_ = v[6], z_prev_ = v[7], v_ = v[8], v_prev_ = v[9], r_ = v[10], r_prev_ = v[11], applied_ = v[12];
   step_ = saved.step;
-  std::vector<Eigen::Index> nonzero;
-  modalForce(applied_, nonzero);
-  assemble(applied_, nonzero);
+  assemble();
 }
 
 std::unique_ptr<TimeIntegrator> makeIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping,

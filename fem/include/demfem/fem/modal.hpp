@@ -13,14 +13,16 @@
 //   keypoint forces (N), values at fixed DOFs go straight into the supports (as ThreeLevelIntegrator).
 // - ModalRecursion: the per-mode recursion and the projected Eq (10); shared by ModalIntegrator and
 //   the weight-drop model of campaign/ (one home of the modal recursion).
-// - ModalIntegrator: keeps the modes the FEM step resolves (w dt <= kResolvedOmegaDt) and answers the
-//   others quasi-statically: u = Phi q + R f, R = K_ff^-1 - Phi W^-2 Phi^T (the residual
-//   flexibility, a static correction present from the first step, so a constant load gives exactly
-//   the static solution). Only the fixed-DOF-free columns are kept (the fixed DOFs never move).
-//   The reactions are computed at the load-cell DOFs only (the modal part by Eq 10, the residual
-//   part statically, K_cf R f); reactions() is zero at the other fixed DOFs. Agreement with
+// - ModalIntegrator: integrates by ModalRecursion the modes whose inertia the scheme feels
+//   (w dt <= kQuasiStaticOmegaDt) and answers the others without inertia: with R = K_ff^-1 -
+//   Phi W^-2 Phi^T (their flexibility) and z = R f, their displacement v follows Eq (5) with M = 0,
+//   alpha (v+ - v-) / (2 dt) + (v+ + v + v-) / 3 = (z+ + z + z-) / 3 (every mode left out has the
+//   time constant alpha + beta / w^2, taken as alpha), and u = Phi q + v. A constant load gives
+//   exactly the static solution from the first step (a static correction). Only the free DOFs'
+//   columns are kept (the fixed DOFs never move). The reactions are computed at the load-cell DOFs
+//   only (Eq 10 on the modes and on v); reactions() is zero at the other fixed DOFs. Agreement with
 //   ThreeLevelIntegrator on load cell and deformation: within 0.1 % of the signal's range
-//   (tests/fem/modal_integrator_test.cpp, docs/fem.md).
+//   (tests/fem/modal_integrator_test.cpp; figures in docs/fem.md).
 // - Cost per step: (modes + nonzero force entries) x free DOFs multiply-adds; the DEM's forces are
 //   nonzero only on the keypoints in contact, so the step skips zero force entries.
 #pragma once
@@ -37,9 +39,11 @@
 
 namespace demfem::fem {
 
-// Modes of angular frequency w with w dt above this are not resolved by the FEM step (the Nyquist
-// limit w dt = pi) and are answered quasi-statically.
-constexpr double kResolvedOmegaDt = 3.141592653589793;
+// Modes with w dt above this are integrated without inertia: their inertia term in Eq (6), 1/dt^2, is
+// below 3 / (w dt)^2 = 0.3 % of their stiffness term w^2/3. (Truncating at the step's Nyquist limit
+// w dt = pi instead leaves 0.2 % of the load-cell force in the heavily damped modes between, see
+// docs/fem.md.)
+constexpr double kQuasiStaticOmegaDt = 30.0;
 
 class ModalRecursion {
  public:
@@ -69,10 +73,10 @@ class ModalRecursion {
 
 class ModalIntegrator : public TimeIntegrator {
  public:
-  // Computes the modes of `model` (Spectra) up to the resolved frequency and the residual
-  // flexibility (dense Cholesky of K_ff). Throws std::invalid_argument for dt <= 0, negative damping
+  // Computes the modes of `model` (Spectra) up to w dt = max_omega_dt and the residual flexibility
+  // (dense Cholesky of K_ff). Throws std::invalid_argument for dt <= 0, negative damping
   // or a model whose K is not positive definite on the free DOFs; at least one mode is kept.
-  ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping);
+  ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping, double max_omega_dt = kQuasiStaticOmegaDt);
 
   void start(const Eigen::VectorXd& f0) override;
   const Eigen::VectorXd& step(const Eigen::VectorXd& applied_next) override;
@@ -87,18 +91,24 @@ class ModalIntegrator : public TimeIntegrator {
 
  private:
   Eigen::VectorXd modalForce(const Eigen::VectorXd& f, std::vector<Eigen::Index>& nonzero) const;
-  void assemble(const Eigen::VectorXd& f, const std::vector<Eigen::Index>& nonzero);
+  Eigen::VectorXd residualOf(const Eigen::VectorXd& f, const std::vector<Eigen::Index>& nonzero) const;
+  void assemble();
 
   int dofs_ = 0;
   std::vector<int> free_, cell_;       // free DOFs; load-cell DOFs (reaction functionals)
   Eigen::MatrixXd phi_, phi_t_;        // free x modes and its transpose
   Eigen::MatrixXd residual_;           // R on the free DOFs (symmetric)
-  Eigen::MatrixXd cell_residual_;      // K_cf R: load-cell DOFs x free DOFs
+  Eigen::MatrixXd cell_stiffness_;     // K_cf: load-cell DOFs x free DOFs
+  Eigen::MatrixXd cell_a1_, cell_a2_, cell_a3_;  // Eq (6)-(8) on the load-cell rows
   std::unique_ptr<ModalRecursion> recursion_;
+  double lag_a1_ = 0, lag_a3_ = 0;     // Eq (5) without inertia, on the modes left out
   double highest_mode_Hz_ = 0;
   std::int64_t step_ = 0;
   ModalRecursion::State modal_;
   Eigen::VectorXd g_, g_prev_;         // modal forces of levels i, i-1
+  Eigen::VectorXd z_, z_prev_;         // R f of levels i, i-1
+  Eigen::VectorXd v_, v_prev_;         // residual displacement of levels i, i-1 (free DOFs)
+  Eigen::VectorXd r_, r_prev_;         // Eq (10) load-cell forces of the residual, levels i, i-1
   Eigen::VectorXd applied_, u_;        // applied force and displacement of level i
   Eigen::VectorXd cell_reaction_;      // reactions at cell_ of level i
 };
