@@ -166,7 +166,6 @@ class Checker {
                         formatNumber(m.yield_Pa));
     }
     checkInteractionTable();
-    checkBackendModels();
   }
 
   // Every particle-particle and particle-wall pair exactly once; walls never touch each other.
@@ -208,22 +207,6 @@ class Checker {
           issues_.add("/soil/interactions", "missing the pair (\"" + p + "\", \"" + q + "\")");
       }
     }
-  }
-
-  // The LIGGGHTS backend offers only its own contact laws (docs/architecture.md section 11), also
-  // when it only deposits the soil.
-  void checkBackendModels() {
-    if (study_.dem.backend != "liggghts" && study_.soil.deposition_backend != DepositionBackend::Liggghts) return;
-    const ContactModel& c = study_.soil.contact;
-    if (known("/soil/contact/normal") && c.normal == NormalModel::EdemHysteretic)
-      issues_.add("/soil/contact/normal", "\"edem-hysteretic\" is not available in the liggghts backend; use "
-                                          "\"hooke\" or \"hooke-hysteresis\"");
-    if (known("/soil/contact/cohesion") && c.cohesion == CohesionModel::EdemLinear)
-      issues_.add("/soil/contact/cohesion", "\"edem-linear\" is not available in the liggghts backend; use \"sjkr\" "
-                                            "or \"sjkr2\"");
-    if (known("/soil/contact/rolling") && c.rolling == RollingModel::EdemStandard)
-      issues_.add("/soil/contact/rolling", "\"edem-standard\" is not available in the liggghts backend; use \"cdt\" "
-                                           "or \"epsd\"");
   }
 
   void checkTools() {

@@ -3,12 +3,13 @@
 #include "demfem/study/contact_laws.hpp"
 #include "demfem/study/study.hpp"
 
+#include "source_files.hpp"
+
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 using demfem::study::Study;
@@ -16,18 +17,11 @@ using demfem::study::StudyError;
 
 namespace {
 
-const std::filesystem::path kSource = DEMFEM_SOURCE_DIR;
+using demfem::study::testing::kSource;
+using demfem::study::testing::readText;
 const std::filesystem::path kBinary = DEMFEM_BINARY_DIR;
 constexpr const char* kBegin = "<!-- key reference: generated from the key table, do not edit -->\n";
 constexpr const char* kEnd = "<!-- end of key reference -->";
-
-std::string readText(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  REQUIRE(in);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 Study quick() { return demfem::study::loadStudy(kSource / "studies/quick.json"); }
 

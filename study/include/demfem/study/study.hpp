@@ -218,7 +218,7 @@ struct FemSettings {
 enum class TimeStepCriterion { Rayleigh, StiffestSpring };
 
 struct DemSettings {
-  std::string backend = "builtin";   // builtin | liggghts | a test backend name
+  std::string backend = "builtin";   // a backend of this build (study::backendIssues checks it)
   TimeStepCriterion criterion = TimeStepCriterion::Rayleigh;
   double dt_fraction = 0.2;          // of the chosen criterion's critical step
   std::optional<double> dt_s;        // explicit step, overrides the criterion
