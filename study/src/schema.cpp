@@ -522,7 +522,9 @@ const Section<FemSettings>& femSection() {
   static const Section<FemSettings> s{
       "fem",
       {{"dt_s", &FemSettings::dt_s, Need::Required, closedInterval(kMinFemStep_s, 1.0), {}, always(), {},
-        "Table 3's dt_FEM: the FEM step and coupling interval (force recording interval without FEM)"}}};
+        "Table 3's dt_FEM: the FEM step and coupling interval (force recording interval without FEM)"},
+       {"integration", choice(&FemSettings::integration, kFemIntegrations), Need::Optional, {}, {}, always(), {},
+        "`modal`: the modes the step feels plus a static correction; `full`: Eq (5) on every DOF (docs/fem.md)"}}};
   return s;
 }
 
