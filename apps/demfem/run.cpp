@@ -279,7 +279,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
   cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (outputs then marked incomplete)")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
-  cmd->add_option("--threads", o->threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
+  cmd->add_option("--threads", o->threads, "threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");

@@ -2,7 +2,7 @@
 // backend-neutral soil file both read, deposited once per seed by the study's deposition backend).
 // - Speed (default): the study's soil and first tool with plain hooke, tangential history and cdt
 //   rolling friction, the same calls on both backends: particle-steps per second on 1 and 2 cores
-//   (built-in: OpenMP threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean draught
+//   (built-in: threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean draught
 //   force over the same drag window with its scatter over the seeds. Deposition and insertion are
 //   not timed.
 // - --coupled: the study as it is (contact laws included), run coupled with the FEM client

@@ -539,7 +539,7 @@ const Section<DemSettings>& demSection() {
        {"dt_fraction", &DemSettings::dt_fraction, Need::Required, leftOpen(0.0, 1.0), {}, criterionStep(), {},
         "fraction of the critical step"},
        {"threads", &DemSettings::threads, Need::Optional, {}, {1, kMaxThreads}, always(), "the machine's cores",
-        "OpenMP threads of the built-in DEM (`demfem run --threads N` overrides)"},
+        "threads of the built-in DEM (`demfem run --threads N` overrides)"},
        {"seed", &DemSettings::seed, Need::Optional, {}, kSeed, always(), {},
         "random numbers drawn during the run (the deposition has its own)"}}};
   return s;
