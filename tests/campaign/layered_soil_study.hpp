@@ -103,6 +103,15 @@ inline double secondsSince(std::chrono::steady_clock::time_point t) {
 
 }  // namespace detail
 
+// `demfem diagnose` of `recordings` with the single-layer built-in study of `bin`.
+inline Diagnosis diagnoseSingleLayer(const LayeredBin& bin, const std::vector<analysis::Recording>& recordings,
+                                     const DiagnosisSettings& settings) {
+  const std::string single_file = fixtureData("single_layer_bin.json").string();
+  const auto single = builtinStudy(bin, single_file);
+  SoilBinModel model(SoilForce::Draught, study::parseStudy(single.dump(), single_file));
+  return diagnose(single, single_file, recordings, model, settings);
+}
+
 inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vector<analysis::Recording>& recordings,
                                          const CalibrationOptions& options, const DiagnosisSettings* diagnosis) {
   LayeredSoilOutcome out;
@@ -137,7 +146,7 @@ inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vecto
   for (const auto& [depth, values] : seeds) out.depths.push_back({depth, detail::seedMean(values), calibrated.at(depth), single_layer.at(depth)});
   if (diagnosis) {
     t = std::chrono::steady_clock::now();
-    out.diagnosis = diagnose(single, single_file, recordings, single_model, *diagnosis);
+    out.diagnosis = diagnoseSingleLayer(bin, recordings, *diagnosis);
     out.diagnosis_wall_s = detail::secondsSince(t);
   }
   return out;
