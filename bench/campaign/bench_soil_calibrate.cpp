@@ -1,6 +1,6 @@
 // Soil calibration and diagnosis benchmark (docs/calibration.md, "Soil against LIGGGHTS"): the
 // layered-bin fixture of the physics test (tests/campaign/liggghts_layered_bin.hpp, LIGGGHTS itself
-// from the deck kept with the test), by default the small bin of the issue (about 2,700 particles,
+// from the deck kept with the test), by default the small bin of the issue (about 2,570 particles,
 // 200 mm stroke, depths 20, 40, 55 mm, five seeds); then `--preset layered-soil`, the single-layer
 // fit at the shallowest depth and the diagnosis of the single-layer study, each timed. Prints a
 // table; --json writes the same numbers.

@@ -103,12 +103,16 @@ inline double secondsSince(std::chrono::steady_clock::time_point t) {
 
 }  // namespace detail
 
-// `demfem diagnose` of `recordings` with the single-layer built-in study of `bin`.
+// `demfem diagnose` of `recordings` with the single-layer built-in study of `bin`, its particle
+// friction set to `static_friction` when given. The soil is prepared (deposited) at the fixture
+// study's friction whatever the study's: the deck's preparation (deposit.in).
 inline Diagnosis diagnoseSingleLayer(const LayeredBin& bin, const std::vector<analysis::Recording>& recordings,
-                                     const DiagnosisSettings& settings) {
+                                     const DiagnosisSettings& settings, std::optional<double> static_friction = std::nullopt) {
   const std::string single_file = fixtureData("single_layer_bin.json").string();
-  const auto single = builtinStudy(bin, single_file);
-  SoilBinModel model(SoilForce::Draught, study::parseStudy(single.dump(), single_file));
+  const auto prepared = builtinStudy(bin, single_file);
+  SoilBinModel model(SoilForce::Draught, study::parseStudy(prepared.dump(), single_file));
+  auto single = prepared;
+  if (static_friction) single["soil"]["interactions"][0]["static_friction"] = *static_friction;  // the soil-soil pair
   return diagnose(single, single_file, recordings, model, settings);
 }
 

@@ -73,7 +73,9 @@ TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-la
   const campaign::test::TempDir dir("layered-diagnose");
   ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
   const campaign::test::LayeredBin bin;
-  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"));
+  // The single layer has the top layer's friction (the deck's 0.2): right at the shallowest depth,
+  // blind to the stronger soil below (the first test case's single-layer fit at 20 mm).
+  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"), 0.2);
   WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent << " %, gain "
                      << d.gain_percent << " %");
   REQUIRE(d.cause);
