@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   bool ci_bin = false, no_diagnosis = false, diagnosis_only = false;
   int diagnosis_seeds = 1, diagnosis_evaluations = 8;
   int max_evaluations = 12, model_seeds = 3;
-  double window_begin_mm = 50;
+  double window_begin_mm = 50, diagnosis_friction = 0.2;
   std::string out_dir = "bench-soil", recordings_dir;
   bin.seeds = 5;
   app.add_flag("--ci-bin", ci_bin, "The physics test's bin (100 x 140 mm, 40 mm stroke, 3 seeds) instead of the small bin (100 x 330 mm, 200 mm stroke)");
@@ -48,7 +48,12 @@ int main(int argc, char** argv) {
   app.add_option("--recordings", recordings_dir, "Use the LIGGGHTS recordings of an earlier run in this directory instead of running LIGGGHTS")
       ->check(CLI::ExistingDirectory);
   app.add_flag("--no-diagnosis", no_diagnosis, "Skip the diagnosis");
-  app.add_flag("--diagnosis-only", diagnosis_only, "Only the diagnosis of the single-layer study (no calibration)");
+  app.add_flag("--diagnosis-only", diagnosis_only,
+               "Only the diagnosis of the single-layer study at --diagnosis-friction (no calibration; otherwise the diagnosis starts from the "
+               "single layer fitted at the shallowest depth)");
+  app.add_option("--diagnosis-friction", diagnosis_friction, "Particle friction of the single-layer study of --diagnosis-only (the deck's top layer: 0.2)")
+      ->check(CLI::Range(0.05, 1.5))
+      ->capture_default_str();
   app.add_option("--diagnosis-seeds", diagnosis_seeds, "Model seeds of the diagnosis' runs")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--diagnosis-evaluations", diagnosis_evaluations, "Objective evaluations per fit of the diagnosis")
       ->check(CLI::PositiveNumber)
@@ -85,7 +90,7 @@ int main(int argc, char** argv) {
     };
     if (diagnosis_only) {
       t = Clock::now();
-      const auto d = campaign::test::diagnoseSingleLayer(bin, recordings, diagnosis);
+      const auto d = campaign::test::diagnoseSingleLayer(bin, recordings, diagnosis, campaign::test::singleLayerStudy(bin, diagnosis_friction));
       std::printf("diagnosis: %s (%s), %.0f s\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str(),
                   campaign::test::detail::secondsSince(t));
       cli::writeJson(json_target, {{"diagnosis", campaign::toJson(d, diagnosis, "")},

@@ -75,7 +75,8 @@ TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-la
   const campaign::test::LayeredBin bin;
   // The single layer has the top layer's friction (the deck's 0.2): right at the shallowest depth,
   // blind to the stronger soil below (the first test case's single-layer fit at 20 mm).
-  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"), 0.2);
+  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"),
+                                                     campaign::test::singleLayerStudy(bin, 0.2));
   WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent << " %, gain "
                      << d.gain_percent << " %");
   REQUIRE(d.cause);
@@ -90,7 +91,8 @@ TEST_CASE("soil against LIGGGHTS: diagnose of a single-layer bin with the same s
   ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
   campaign::test::LayeredBin bin;
   bin.uniform_friction = 0.5;  // the single-layer study's friction (tests/campaign/data/single_layer_bin.json)
-  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"));
+  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"),
+                                                     campaign::test::singleLayerStudy(bin, std::nullopt));
   WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent << " %");
   CHECK_FALSE(d.cause);
 }
