@@ -189,6 +189,27 @@ TEST_CASE("rolling friction decelerates a rolling sphere at (5/7) mu_r g", "[bui
   }
 }
 
+TEST_CASE("edem-standard rolling friction stops a rolling sphere at v0^2 / (10/7 mu_r g) and leaves it at rest", "[builtin]") {
+  // The law as stated (a constant torque -mu_r Fn R w_hat) reverses the spin every step once the
+  // sphere has stopped: |w| chatters at about mu_r m g R dt / I = 4.9e-3 rad/s here, for ever.
+  SoilParameters p;
+  p.rolling_friction = 0.1;
+  p.model.rolling = study::RollingModel::EdemStandard;
+  const double m = sphereMass(p.density, kR);
+  DemSimulation sim(makeSoil(p), box(0.5), 1);
+  sim.addPlane({{0, 0, 0}, {0, 1, 0}, 1});
+  const double v0 = 0.2;
+  sim.addParticle({{0, kR - m * kG / (5 * kR * p.yield), 0}, {v0, 0, 0}, {0, 0, -v0 / kR}, kR, 0, 0});
+  sim.setTimeStep(1e-5);
+  sim.run(50000);  // 0.5 s; it stops at about 0.29 s
+  const auto s = sim.particle(0);
+  // Stopping distance under the constant deceleration (5/7) mu_r g: 1 %.
+  CHECK(s.x[0] == Approx(v0 * v0 / (10.0 / 7.0 * p.rolling_friction * kG)).epsilon(1e-2));
+  // At rest: no chatter left (the regularised law's spin decays by 1/12 per step below its scale).
+  CHECK(std::sqrt(s.w[0] * s.w[0] + s.w[1] * s.w[1] + s.w[2] * s.w[2]) < 1e-9);
+  CHECK(std::fabs(s.v[0]) < 1e-9);
+}
+
 TEST_CASE("cohesive pair needs k_coh pi R* delta0 to separate after loading to delta_max", "[builtin]") {
   // EDEM hysteretic + linear cohesion: on unloading Fn = K2 (delta - delta0) - k pi R* delta, so the
   // largest tension along the separation path is at delta0 = delta_max (1 - e^2): k pi R* delta0.
