@@ -7,9 +7,21 @@
 #include <cstdio>
 #include <cmath>
 #include <set>
+#include <stdexcept>
 
 namespace demfem::campaign {
 namespace {
+
+// The residuals of the cases whose baseline ran: a case the study as given cannot simulate (a DEM
+// blow-up) says nothing about a discrepancy, and scoring its missing quantities as 0 would credit
+// any extension whose runs happen not to fail.
+std::vector<Residual> comparable(const std::vector<Residual>& residuals, const std::vector<analysis::CaseKey>& failed) {
+  std::vector<Residual> out;
+  for (const Residual& r : residuals)
+    if (std::find(failed.begin(), failed.end(), r.key) == failed.end()) out.push_back(r);
+  return out;
+}
+
 
 using Clock = std::chrono::steady_clock;
 using nlohmann::ordered_json;
@@ -126,17 +138,19 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
                 ? "leave one case out (" + std::to_string(cases.size()) + " folds)"
                 : "leave one case out, " + folds_used + " (a split cannot identify " + joined(folds.unidentified) + ")";
   std::vector<Residual> before, before_all;
-  for (const Residual& b : base.baseline_residuals) {
+  for (const Residual& b : comparable(base.baseline_residuals, base.failed_baseline_cases)) {
     if (b.key.kind != cause.domain) continue;
     before_all.push_back(b);
     if (!r.held_out || std::find(folds.held_out_cases.begin(), folds.held_out_cases.end(), b.key) != folds.held_out_cases.end())
       before.push_back(b);
   }
   r.error_before_percent = errorPercent(before);
-  r.error_after_percent = errorPercent(r.held_out ? folds.held_out : all.residuals);
+  const std::vector<Residual> after = comparable(r.held_out ? folds.held_out : all.residuals, base.failed_baseline_cases);
+  r.error_after_percent = errorPercent(after);
   r.gain_percent = r.error_before_percent > 0 ? 100 * (r.error_before_percent - r.error_after_percent) / r.error_before_percent : 0.0;
-  const double n = static_cast<double>(all.residuals.size());
-  r.bic = r.chi2 + static_cast<double>(e.parameters.size()) * std::log(n);
+  const std::vector<Residual> fitted_all = comparable(all.residuals, base.failed_baseline_cases);
+  const double n = static_cast<double>(fitted_all.size());
+  r.bic = chi2(fitted_all) + static_cast<double>(e.parameters.size()) * std::log(n);
   r.delta_bic = r.bic - chi2(before_all);
   r.wall_time_s = secondsSince(start);
   return r;
@@ -212,8 +226,13 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   CalibrationOptions whole_stroke = settings.calibration;
   whole_stroke.stroke_ends_with_window = false;
   d.baseline_residuals = predict(study, origin, recordings, model, whole_stroke, &d.baseline_runs);
-  d.baseline_error_percent = errorPercent(d.baseline_residuals);
-  d.baseline_chi2 = chi2(d.baseline_residuals);
+  for (const Residual& r : d.baseline_residuals)
+    if (r.missing && std::find(d.failed_baseline_cases.begin(), d.failed_baseline_cases.end(), r.key) == d.failed_baseline_cases.end())
+      d.failed_baseline_cases.push_back(r.key);
+  const std::vector<Residual> ran = comparable(d.baseline_residuals, d.failed_baseline_cases);
+  if (ran.empty()) throw std::runtime_error("diagnose: the study as given fails (DEM blow-up) on every case; nothing to compare");
+  d.baseline_error_percent = errorPercent(ran);
+  d.baseline_chi2 = chi2(ran);
   d.residual_count = static_cast<int>(d.baseline_residuals.size());
   const analysis::ComparisonResult comparison = analysis::compare(recordings, d.baseline_runs, settings.calibration.objective.analysis);
   d.signatures = analysis::signaturesOf(comparison, settings.signatures);

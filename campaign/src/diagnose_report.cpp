@@ -142,6 +142,12 @@ std::string rankingTable(const Diagnosis& d) {
   return md;
 }
 
+nlohmann::json caseLabels(const std::vector<analysis::CaseKey>& cases) {
+  nlohmann::json labels = nlohmann::json::array();
+  for (const auto& c : cases) labels.push_back(c.label());
+  return labels;
+}
+
 }  // namespace
 
 nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, const std::string& extended_study_path) {
@@ -153,6 +159,7 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
           {"gain_percent", d.gain_percent},
           {"baseline_error_percent", d.baseline_error_percent},
           {"baseline_chi2", d.baseline_chi2},
+          {"failed_baseline_cases", caseLabels(d.failed_baseline_cases)},
           {"residuals", d.residual_count},
           {"thresholds",
            {{"min_error_percent", settings.min_error_percent},
@@ -172,6 +179,9 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   if (d.cause) md += "Held-out error cut by the extension: " + number(d.gain_percent) + " %. The extended study is `extended_study.json`.\n\n";
   md += "Baseline (the study as given) against all cases: error " + number(d.baseline_error_percent) + " % (RMS of 100 (sim - meas) / meas " +
         "over every quantity of every case), chi2 " + number(d.baseline_chi2) + " over " + std::to_string(d.residual_count) + " residuals.\n\n";
+  if (!d.failed_baseline_cases.empty())
+    md += "Left out of every error and BIC: the cases whose baseline run failed (DEM blow-up): " +
+          caseLabels(d.failed_baseline_cases).dump() + ".\n\n";
   md += "Thresholds: a cause is named when the baseline error is at least " + number(settings.min_error_percent) +
         " %, its extension cuts the held-out error by at least " + number(settings.min_gain_percent) +
         " % and lowers BIC = chi2 + k ln n by at least " + number(settings.min_delta_bic) + " (docs/diagnosis.md).\n\n";

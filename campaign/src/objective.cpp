@@ -104,7 +104,7 @@ std::vector<Residual> residuals(const std::vector<Quantity>& measured, const std
   for (const Quantity& m : measured) {
     const auto it = std::find_if(simulated.begin(), simulated.end(), [&](const Quantity& s) { return s.key == m.key && s.name == m.name; });
     const double sim = it == simulated.end() ? 0.0 : it->value;
-    out.push_back({m.key, m.name, m.value, sim, m.sigma, (sim - m.value) / m.sigma});
+    out.push_back({m.key, m.name, m.value, sim, m.sigma, (sim - m.value) / m.sigma, it == simulated.end()});
   }
   return out;
 }
@@ -117,7 +117,7 @@ double chi2(const std::vector<Residual>& residuals) {
 
 nlohmann::json toJson(const Residual& r) {
   return {{"case", r.key.label()}, {"quantity", r.quantity}, {"measured", r.measured}, {"simulated", r.simulated},
-          {"sigma", r.sigma},      {"normalized", r.normalized}};
+          {"sigma", r.sigma},      {"normalized", r.normalized}, {"missing", r.missing}};
 }
 
 }  // namespace demfem::campaign

@@ -95,7 +95,8 @@ struct Diagnosis {
   std::vector<Residual> baseline_residuals;
   std::vector<analysis::Recording> baseline_runs;
   std::vector<analysis::Recording> measured;
-  double baseline_error_percent = 0.0;      // all cases
+  double baseline_error_percent = 0.0;      // all cases whose baseline runs ran
+  std::vector<analysis::CaseKey> failed_baseline_cases;  // a baseline run failed: left out of every error and BIC
   double baseline_chi2 = 0.0;
   int residual_count = 0;
   std::vector<CauseResult> ranking;         // fitted causes ranked first, then the others

@@ -60,6 +60,7 @@ struct Residual {
   std::string quantity;
   double measured = 0, simulated = 0, sigma = 0;
   double normalized = 0;  // (simulated - measured) / sigma
+  bool missing = false;   // the simulated side lacks the quantity (a failed run): simulated is 0
 };
 
 // Residuals of `simulated` against `measured`, one per measured quantity. A quantity missing on the
