@@ -84,7 +84,7 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
       CHECK(p.x_m[1] <= st.soil.fill_height_m);
       CHECK(p.layer == (st.soil.fill_height_m - p.x_m[1] < 0.01 ? 0 : 1));
     }
-    CHECK(soil.backend == study::DepositionBackend::Builtin);
+    CHECK(soil.backend == "builtin");
     CHECK(soil.seed == st.soil.deposition_seed);
     CHECK(soil.settling.stages == static_cast<int>(st.soil.layers.size()) + 1);
     CHECK(soil.settling.threshold_J == st.soil.settle_kinetic_energy_J);
