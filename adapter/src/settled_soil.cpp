@@ -46,7 +46,7 @@ nlohmann::json headerJson(const SettledSoil& soil) {
   const SettlingFigures& s = soil.settling;
   return {{"soil_hash", soil.soil_hash},
           {"deposition",
-           {{"backend", study::depositionBackendName(soil.backend)}, {"seed", soil.seed}, {"cores", soil.cores}}},
+           {{"backend", soil.backend}, {"seed", soil.seed}, {"cores", soil.cores}}},
           {"settling",
            {{"kinetic_energy_J", s.kinetic_energy_J},
             {"threshold_J", s.threshold_J},
@@ -138,7 +138,7 @@ SettledSoil readSettledSoil(const std::filesystem::path& file) {
     const auto& h = f.header;
     soil.soil_hash = h.at("soil_hash").get<std::string>();
     const auto& d = h.at("deposition");
-    soil.backend = study::parseDepositionBackend(d.at("backend").get<std::string>());
+    soil.backend = d.at("backend").get<std::string>();
     soil.seed = d.at("seed").get<std::uint64_t>();
     soil.cores = d.at("cores").get<std::int32_t>();
     const auto& s = h.at("settling");
@@ -222,7 +222,7 @@ std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path&
   const nlohmann::json record{{"file", file.string()},
                               {"file_checksum", checksum},
                               {"soil_hash", soil.soil_hash},
-                              {"deposition_backend", study::depositionBackendName(soil.backend)},
+                              {"deposition_backend", soil.backend},
                               {"deposition_seed", soil.seed},
                               {"deposition_cores", soil.cores},
                               {"particles", soil.particles.size()},

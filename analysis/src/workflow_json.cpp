@@ -1,6 +1,8 @@
 // JSON form of the evaluate / compare results: units in every key name, null for undefined values.
 #include "demfem/analysis/workflow.hpp"
 
+#include "report_sections.hpp"
+
 #include <cmath>
 
 namespace demfem::analysis {
@@ -9,7 +11,6 @@ namespace {
 using nlohmann::json;
 
 json number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
-json optionalNumber(const std::optional<double>& value) { return value ? number(*value) : json(nullptr); }
 
 json caseJson(const CaseKey& key) {
   json j{{"tool", key.tool}, {"label", key.label()}};
@@ -52,15 +53,11 @@ json runJson(const EvaluatedRun& run) {
   return j;
 }
 
+// The case, its repeats and the numbers of its row of soil_bin_cases.csv.
 json pooledJson(const PooledCase& c) {
   json j = caseJson(c.key);
+  j.update(detail::soilBinCasesSection().values(c).json({"case", "tool", "depth_mm", "repeats"}));
   j["repeats"] = c.repeats;
-  j["force_mean_N"] = number(c.force_mean_N);
-  j["force_std_N"] = number(c.force_std_N);
-  j["force_between_repeats_std_N"] = optionalNumber(c.force_between_repeats_std_N);
-  j["deformation_mean_mm"] = number(c.deformation_mean_mm);
-  j["deformation_std_mm"] = number(c.deformation_std_mm);
-  j["deformation_between_repeats_std_mm"] = optionalNumber(c.deformation_between_repeats_std_mm);
   return j;
 }
 
@@ -110,10 +107,10 @@ json spectralJson(const SpectralComparison& s, const std::string& unit) {
           {"mean_fitted_amplitude_ratio", number(s.mean_fitted_ratio)}};
 }
 
-json differencesJson(const ResponseSummary& m, const ResponseSummary& s) {
-  return {{"steady_value_difference_percent", number(percentDifference(m.steady.mean, s.steady.mean))},
-          {"frequency_difference_percent", number(percentDifference(m.frequency_Hz.mean, s.frequency_Hz.mean))},
-          {"damping_ratio_difference_percent", number(percentDifference(m.damping_ratio.mean, s.damping_ratio.mean))}};
+// The percent differences of one signal's row of calibration.csv.
+json differencesJson(const CalibrationComparison& c, const ResponseSummary& m, const ResponseSummary& s) {
+  const detail::CalibrationRow row{&c, "", &m, &s, std::nan("")};
+  return detail::calibrationSection().values(row).jsonEndingWith("_difference_percent");
 }
 
 }  // namespace
@@ -162,8 +159,8 @@ json toJson(const ComparisonResult& result, const AnalysisSettings& settings) {
     json item = caseJson(c.key);
     item["measured"] = calibrationCaseJson(c.measured);
     item["simulated"] = calibrationCaseJson(c.simulated);
-    item["force_differences"] = differencesJson(c.measured.force, c.simulated.force);
-    item["deformation_differences"] = differencesJson(c.measured.deformation, c.simulated.deformation);
+    item["force_differences"] = differencesJson(c, c.measured.force, c.simulated.force);
+    item["deformation_differences"] = differencesJson(c, c.measured.deformation, c.simulated.deformation);
     item["correlations"] = json::array();
     for (const auto& corr : c.correlations)
       item["correlations"].push_back({{"measured_repeat", corr.measured_repeat},

@@ -41,7 +41,7 @@ std::chrono::milliseconds millis(double seconds) {
 // before the backend is built) when its file is missing; the serving backend deposits its own.
 void provideSoil(const study::Study& study, const std::string& backend) {
   const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
-  const std::string& deposition = study::depositionBackendName(study.soil.deposition_backend);
+  const std::string& deposition = study.soil.deposition_backend;
   if (std::filesystem::exists(file) || deposition == backend) return;
   std::cerr << "demfem-dem: depositing the soil with " << deposition << " into " << file.string() << std::endl;
   cli::DepositCost cost;

@@ -1,5 +1,6 @@
-// Options shared by `demfem evaluate` and `demfem compare` (evaluate.cpp, compare.cpp): the
-// Section 2.3 settings, output directory, plots, and turning analysis errors into exit codes.
+// Options shared by `demfem evaluate`, `compare`, `calibrate` and `diagnose`: the Section 2.3
+// settings, output directory, plots, the staged writing of the outputs, and turning analysis errors
+// into exit codes.
 #pragma once
 
 #include "demfem/analysis/workflow.hpp"
@@ -7,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -41,6 +43,18 @@ inline void finishAnalysisOptions(AnalysisOptions& options) {
     throw InputError("--window-begin-mm/--window-end-mm: need 0 <= begin < end, got " + std::to_string(e.window_begin_mm) + " and " +
                      std::to_string(e.window_end_mm));
   if (!(e.baseline_duration_s >= 0.0)) throw InputError("--baseline-s: must be >= 0");
+}
+
+// Writes a command's files through one staged output directory (options.out_dir; nothing appears
+// under its final name unless `write` and the commit succeed): write(out, renderer), the renderer
+// null under --no-plots. Returns the output directory.
+template <class Write>
+std::filesystem::path writeStaged(const AnalysisOptions& options, Write&& write) {
+  analysis::StagedOutput out(options.out_dir);
+  const analysis::GnuplotRenderer renderer(options.gnuplot);
+  write(out, options.no_plots ? nullptr : &renderer);
+  out.commit();
+  return out.directory();
 }
 
 // Runs `body`, mapping the analysis library's input errors to the CLI's (exit code 2).

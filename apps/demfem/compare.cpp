@@ -40,10 +40,9 @@ void addCompareCommand(CLI::App& app) {
           {options->simulated}, options->simulated_tool.empty() ? std::nullopt : std::optional<std::string>(options->simulated_tool));
       const auto result = analysis::compare(measured, simulated, settings);
 
-      analysis::StagedOutput out(options->analysis.out_dir);
-      const analysis::GnuplotRenderer renderer(options->analysis.gnuplot);
-      analysis::writeComparison(result, settings, out, options->analysis.no_plots ? nullptr : &renderer);
-      out.commit();
+      const auto dir = writeStaged(options->analysis, [&](analysis::StagedOutput& out, const analysis::GnuplotRenderer* renderer) {
+        analysis::writeComparison(result, settings, out, renderer);
+      });
       writeJson(json_target, analysis::toJson(result, settings));
 
       if (textOnStdout(json_target)) {
@@ -58,7 +57,7 @@ void addCompareCommand(CLI::App& app) {
                     << c.simulated.deformation.frequency_Hz.mean << " Hz (measured / simulated), correlation "
                     << c.correlations.front().deformation.correlation << "\n";
         for (const auto& u : result.unmatched_cases) std::cout << "not compared: " << u << "\n";
-        std::cout << "report: " << (out.directory() / "report.md").string() << "\n";
+        std::cout << "report: " << (dir / "report.md").string() << "\n";
       }
     });
   });

@@ -28,28 +28,23 @@ struct DepositOptions {
   bool quiet = false;
 };
 
-nlohmann::json settlingJson(const adapter::SettledSoil& soil) {
-  const auto& s = soil.settling;
-  return {{"particles", soil.particles.size()},
-          {"settled", adapter::unsettledReason(s).empty()},
-          {"kinetic_energy_J", s.kinetic_energy_J},
-          {"threshold_J", s.threshold_J},
-          {"stages", s.stages},
-          {"stages_capped", s.stages_capped},
-          {"final_phase_capped", s.final_phase_capped},
-          {"simulated_s", s.simulated_s},
-          {"surface_height_mm", s.surface_height_m * 1e3},
-          {"packing_fraction", s.packing_fraction},
-          {"deposition_backend", study::depositionBackendName(soil.backend)},
-          {"deposition_seed", soil.seed},
-          {"deposition_cores", soil.cores}};
+// The command's report: the soil record a run keeps (adapter::soilRecordJson, its "file" named
+// "soil_file" here), the study and whether the file was reused.
+nlohmann::json reportJson(const std::string& study_file, const std::filesystem::path& file, const adapter::SettledSoil& soil,
+                          bool reused) {
+  nlohmann::json report = nlohmann::json::parse(adapter::soilRecordJson(soil, file, adapter::settledSoilChecksum(file)));
+  report.erase("file");
+  report["soil_file"] = file.string();
+  report["study"] = study_file;
+  report["reused"] = reused;
+  return report;
 }
 
 void printSoil(const std::filesystem::path& file, const adapter::SettledSoil& soil) {
   const auto& s = soil.settling;
   const std::string reason = adapter::unsettledReason(s);
   std::cout << file.string() << ": " << soil.particles.size() << " particles deposited by "
-            << study::depositionBackendName(soil.backend) << " (seed " << soil.seed << "), surface at "
+            << soil.backend << " (seed " << soil.seed << "), surface at "
             << s.surface_height_m * 1e3 << " mm, packing fraction " << s.packing_fraction << ", kinetic energy "
             << s.kinetic_energy_J << " J (threshold " << s.threshold_J << " J), " << s.stages_capped << " of "
             << s.stages << " stages capped" << (reason.empty() ? "" : "; NOT SETTLED: " + reason) << '\n';
@@ -65,10 +60,13 @@ void addDepositCommand(CLI::App& app) {
       "unless --force. An unsettled soil is saved with its figures; runs refuse it unless --allow-unsettled-soil.");
   auto opt = std::make_shared<DepositOptions>();
   cmd->add_option("STUDY", opt->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
+  std::vector<std::string> soil_backends;
+  for (const BackendEntry& e : backendRegistry())
+    if (e.deposit) soil_backends.push_back(e.capabilities.name);
   cmd->add_option("--backend", opt->backend,
-                  "DEM that deposits: builtin | liggghts (default: the study's soil.deposition.backend). The soil is "
-                  "the study's only if its soil.deposition.backend names the same backend")
-      ->check(CLI::IsMember({"builtin", "liggghts"}));
+                  "DEM that deposits (default: the study's soil.deposition.backend). The soil is the study's only if "
+                  "its soil.deposition.backend names the same backend")
+      ->check(CLI::IsMember(soil_backends));
   cmd->add_option("--soil-dir", opt->soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
   cmd->add_option("--threads", opt->threads, "threads of the built-in deposition (default: the study's /dem/threads)")
       ->check(CLI::PositiveNumber);
@@ -77,19 +75,18 @@ void addDepositCommand(CLI::App& app) {
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([opt, &json_target] {
     study::Study s = cli::loadCheckedStudy(opt->study_file);
-    if (!opt->backend.empty()) s.soil.deposition_backend = study::parseDepositionBackend(opt->backend);
+    if (!opt->backend.empty()) {
+      s.soil.deposition_backend = opt->backend;
+      checkBackends(s);  // the laws of the study in the backend that deposits
+    }
     const std::filesystem::path dir =
         opt->soil_dir.empty() ? adapter::defaultSoilDirectory() : std::filesystem::path(opt->soil_dir);
     const auto file = adapter::settledSoilFile(s, dir);
     const bool text = textOnStdout(json_target);
-    nlohmann::json report{{"study", opt->study_file}, {"soil_file", file.string()}, {"soil_hash", study::soilHash(s)}};
     if (std::filesystem::exists(file) && !opt->force) {
       const auto soil = adapter::readSettledSoil(file, s);
       if (text) std::cout << "already deposited: ", printSoil(file, soil);
-      report["reused"] = true;
-      report.update(settlingJson(soil));
-      report["file_checksum"] = adapter::settledSoilChecksum(file);
-      writeJson(json_target, report);
+      writeJson(json_target, reportJson(opt->study_file, file, soil, true));
       return;
     }
     const int threads = opt->threads > 0 ? opt->threads : s.dem.threads;
@@ -103,9 +100,7 @@ void addDepositCommand(CLI::App& app) {
       if (cost.steps > 0) std::cout << "  " << cost.steps << " steps of " << cost.time_step_s << " s";
       std::cout << "  " << wall_s << " s wall\n";
     }
-    report["reused"] = false;
-    report.update(settlingJson(soil));
-    report["file_checksum"] = adapter::settledSoilChecksum(file);
+    nlohmann::json report = reportJson(opt->study_file, file, soil, false);
     report["steps"] = cost.steps;
     report["time_step_s"] = cost.time_step_s;
     report["wall_time_s"] = wall_s;

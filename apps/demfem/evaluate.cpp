@@ -28,10 +28,9 @@ void addEvaluateCommand(CLI::App& app) {
       const auto recordings = analysis::readRecordings(paths);
       const auto result = analysis::evaluate(recordings, settings);
 
-      analysis::StagedOutput out(options->analysis.out_dir);
-      const analysis::GnuplotRenderer renderer(options->analysis.gnuplot);
-      analysis::writeEvaluation(result, settings, out, options->analysis.no_plots ? nullptr : &renderer);
-      out.commit();
+      const auto dir = writeStaged(options->analysis, [&](analysis::StagedOutput& out, const analysis::GnuplotRenderer* renderer) {
+        analysis::writeEvaluation(result, settings, out, renderer);
+      });
       writeJson(json_target, analysis::toJson(result, settings));
 
       if (textOnStdout(json_target)) {
@@ -41,7 +40,7 @@ void addEvaluateCommand(CLI::App& app) {
         for (const auto& c : result.calibration_cases)
           std::cout << c.key.title() << ": " << c.repeats.size() << " repeat(s), deformation steady " << c.deformation.steady.mean
                     << " mm, " << c.deformation.frequency_Hz.mean << " Hz, damping ratio " << c.deformation.damping_ratio.mean << "\n";
-        std::cout << "report: " << (out.directory() / "report.md").string() << "\n";
+        std::cout << "report: " << (dir / "report.md").string() << "\n";
       }
     });
   });

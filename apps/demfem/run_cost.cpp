@@ -2,6 +2,7 @@
 
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/study/tool_motion.hpp"
 
@@ -12,12 +13,8 @@ namespace demfem::cli {
 
 namespace {
 
-// Measured on the 2-core development machine; the only place these figures enter the code.
-// docs/builtin-dem.md: EDEM laws on the full paper bin, 3.6 M particle-steps/s on 1 thread, 6.3 M on 2.
-constexpr double kBuiltinParticleStepsPerS = 3.6e6;
-constexpr double kBuiltinExtraThreadGain = 6.3 / 3.6 - 1.0;  // per thread beyond the first
-// docs/liggghts-backend.md / README: LIGGGHTS 1.73 M against the built-in's 4.58 M on the same particles.
-constexpr double kLiggghtsToBuiltinSpeed = 1.73 / 4.58;
+// Measured on the 2-core development machine; the only place these figures enter the code (the
+// DEM speeds are the backend registry's, backend_registry.cpp).
 // docs/fem.md: the PMMA plate (738 keypoints): reduction 26 s, 23 ms per FEM step (wall, under load).
 constexpr double kReferenceKeypoints = 738;
 constexpr double kReferenceReductionS = 26.0;
@@ -44,7 +41,9 @@ double demStep(const study::Study& s) {
 
 RunCost estimateRunCost(const study::Study& s) {
   RunCost cost;
-  cost.threads = s.dem.backend == "liggghts" ? 1 : s.dem.threads;  // LIGGGHTS: one MPI rank unless started by mpirun
+  const BackendEntry& backend = findBackend(s.dem.backend);
+  const DemSpeed speed = backend.speed ? backend.speed(s) : DemSpeed{};  // a test backend simulates no particles
+  cost.threads = speed.threads;
   const bool has_soil = study::hasSoil(s.kind);
   if (s.kind == study::StudyKind::WeightDrop && s.weight_drop) {
     cost.fem_steps = wholeSteps(s.weight_drop->duration_s, s.fem.dt_s);
@@ -59,10 +58,8 @@ RunCost estimateRunCost(const study::Study& s) {
     cost.dem_step_s = study::demStepDividing(demStep(s), s.fem.dt_s);  // the step both backends run (one clock)
     cost.dem_steps = wholeSteps(cost.simulated_s, *cost.dem_step_s);
     cost.particles = builtin::estimatedParticleCount(s.soil);
-    const double speed = s.dem.backend == "liggghts"
-                             ? kBuiltinParticleStepsPerS * kLiggghtsToBuiltinSpeed
-                             : kBuiltinParticleStepsPerS * (1.0 + kBuiltinExtraThreadGain * (cost.threads - 1));
-    cost.dem_wall_s = static_cast<double>(cost.dem_steps) * static_cast<double>(cost.particles) / speed;
+    if (backend.speed)
+      cost.dem_wall_s = static_cast<double>(cost.dem_steps) * static_cast<double>(cost.particles) / speed.particle_steps_per_s;
   }
   if (cost.keypoints > 0) {
     const double scale = std::pow(cost.keypoints / kReferenceKeypoints, 2);

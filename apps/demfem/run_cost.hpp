@@ -10,9 +10,10 @@
 //   study's materials, bin walls and smallest particle, as the built-in backend computes it),
 //   shortened to divide the FEM step (study::demStepDividing).
 // - Particles: builtin::estimatedParticleCount (bin volume below the fill, packing, sizes).
-// - Wall time: DEM particle-steps at the measured speed for dem.threads (built-in) or one core
-//   (LIGGGHTS), plus the keypoint reduction and FEM steps scaled from the measured PMMA plate by
-//   (keypoints / 738)^2. A machine that is faster or less loaded than the 2-core one measured runs
+// - Wall time: DEM particle-steps at the measured speed of the study's backend (the backend
+//   registry's DemSpeed, backend_registry.hpp: threads and particle-steps per second; none for a
+//   test backend, which simulates no particles), plus the keypoint reduction and FEM steps scaled
+//   from the measured PMMA plate by (keypoints / 738)^2. A machine that is faster or less loaded than the 2-core one measured runs
 //   quicker.
 #pragma once
 
@@ -37,8 +38,8 @@ struct RunCost {
   double wallSeconds() const { return dem_wall_s + fem_wall_s; }
 };
 
-// Pre: `study` loaded by study::loadStudy. Throws std::invalid_argument for a study whose soil or
-// tool the built-in backend cannot set up.
+// Pre: `study` loaded by study::loadStudy and passed by checkBackends (its backend is in this build).
+// Throws std::invalid_argument for a study whose soil or tool the built-in backend cannot set up.
 RunCost estimateRunCost(const study::Study& study);
 
 }  // namespace demfem::cli

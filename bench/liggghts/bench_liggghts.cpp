@@ -95,7 +95,7 @@ double g_interval_s = 0;
 study::Study seededStudy(const std::string& file, std::uint64_t seed, int cores) {
   study::Study s = study::loadStudy(file);
   if (g_settle_kinetic_energy_J > 0) s.soil.settle_kinetic_energy_J = g_settle_kinetic_energy_J;
-  if (!g_deposition.empty()) s.soil.deposition_backend = study::parseDepositionBackend(g_deposition);
+  if (!g_deposition.empty()) s.soil.deposition_backend = g_deposition;
   s.soil.deposition_seed = seed;
   s.dem.threads = cores;
   if (s.tools.empty()) throw cli::InputError(file + ": the benchmark drags the study's first tool; it has none");
@@ -131,8 +131,7 @@ RunResult drag(adapter::CouplingApi& dem, const study::Study& s, double window_s
   const std::clock_t cpu_start = std::clock();
   for (long i = 0; i < intervals; ++i) {
     dem.simulate(interval);
-    const auto f = dem.nodeForces(tool.name, adapter::ForceMode::IntervalMean);
-    for (std::size_t k = 2; k < f.size(); k += 3) r.draught_N -= f[k];
+    adapter::accumulateDraught(r.draught_N, dem.nodeForces(tool.name, adapter::ForceMode::IntervalMean));
   }
   r.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   r.cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
@@ -155,8 +154,7 @@ class DraughtTap final : public adapter::CouplingApi {
   void simulate(double duration_s) override {
     dem_.simulate(duration_s);
     if (!dragging_) return;
-    const auto f = dem_.nodeForces(tool_, adapter::ForceMode::IntervalMean);
-    for (std::size_t k = 2; k < f.size(); k += 3) sum_N_ -= f[k];
+    adapter::accumulateDraught(sum_N_, dem_.nodeForces(tool_, adapter::ForceMode::IntervalMean));
     ++intervals_;
   }
   adapter::RigidMotion rigidMotion(const std::string& g) override { return dem_.rigidMotion(g); }
@@ -339,7 +337,7 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     };
     // The soil's own backend runs first on each seed: its construction deposits the soil file.
-    const bool liggghts_first = seededStudy(file, 1, 1).soil.deposition_backend == study::DepositionBackend::Liggghts;
+    const bool liggghts_first = seededStudy(file, 1, 1).soil.deposition_backend == "liggghts";
     const std::vector<int> core_counts = g_coupled ? std::vector<int>{1} : std::vector<int>{1, 2};
     for (int seed = 1; seed <= seeds; ++seed)
       for (int cores : core_counts) {
@@ -402,7 +400,7 @@ int main(int argc, char** argv) {
                                  {"window_s", window_s},
                                  {"interval_s", g_interval_s},
                                  {"settle_kinetic_energy_J", s1.soil.settle_kinetic_energy_J},
-                                 {"deposition_backend", study::depositionBackendName(s1.soil.deposition_backend)},
+                                 {"deposition_backend", s1.soil.deposition_backend},
                                  {"runs", all},
                                  {"summary", summary}});
   });

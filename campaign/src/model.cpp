@@ -81,9 +81,8 @@ analysis::Recording draughtRun(const study::Study& study) {
   const double speed_mm_s = std::hypot(plan.drag.velocity_m_s[0], plan.drag.velocity_m_s[1], plan.drag.velocity_m_s[2]) * 1000;
   for (std::int64_t k = 1; k <= plan.drag_steps; ++k) {
     dem->simulate(plan.dt_s);
-    const adapter::NodeArray f = dem->nodeForces(tool.name, adapter::ForceMode::IntervalMean);
     double draught_N = 0;
-    for (std::size_t i = 2; i < f.size(); i += 3) draught_N -= f[i];
+    adapter::accumulateDraught(draught_N, dem->nodeForces(tool.name, adapter::ForceMode::IntervalMean));
     const double t_s = static_cast<double>(k) * plan.dt_s;
     r.time_s.push_back(t_s);
     r.force.push_back(draught_N);

@@ -49,10 +49,13 @@ std::vector<Issue> backendIssues(const Study& study, const std::vector<BackendCa
     for (const BackendCapabilities& b : registry) names += (names.empty() ? "" : ", ") + b.name;
     issues.push_back({"/dem/backend", "unknown backend \"" + study.dem.backend + "\" (this build offers " + names + ")"});
   }
-  const std::string& deposition = depositionBackendName(study.soil.deposition_backend);
+  const std::string& deposition = study.soil.deposition_backend;
   const BackendCapabilities* deposits = find(registry, deposition);
   if (!deposits) {
     issues.push_back({"/soil/deposition/backend", "the " + deposition + " backend is not in this build"});
+  } else if (!deposits->simulates_soil) {
+    issues.push_back({"/soil/deposition/backend", "the " + deposition + " backend simulates no particles: it cannot deposit a soil"});
+    deposits = nullptr;
   }
   // Each backend that touches the soil once: the deposition's, and the run's if it is another.
   std::vector<Issue> laws;

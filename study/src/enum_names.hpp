@@ -33,8 +33,6 @@ inline const NameTable<CohesionModel> kCohesionModels =
     lawNames(kAllCohesionModels, [](CohesionModel m, auto f) { return withCohesionLaw(m, f); });
 inline const NameTable<RollingModel> kRollingModels =
     lawNames(kAllRollingModels, [](RollingModel m, auto f) { return withRollingLaw(m, f); });
-inline const NameTable<DepositionBackend> kDepositionBackends{{"builtin", DepositionBackend::Builtin},
-                                                              {"liggghts", DepositionBackend::Liggghts}};
 inline const NameTable<GeometryKind> kGeometryKinds{{"plate", GeometryKind::Plate},
                                                     {"gmsh", GeometryKind::Gmsh},
                                                     {"matrix-market", GeometryKind::MatrixMarket},

@@ -406,8 +406,8 @@ const Section<Soil>& depositionSection() {
       {{"seed", &Soil::deposition_seed, Need::Optional, {}, kSeed, always(), {}, "random numbers of the gravity deposition"},
        {"settle_kinetic_energy_J", &Soil::settle_kinetic_energy_J, Need::Optional, leftOpen(0.0, 1e6), {}, always(), {},
         "deposition ends below this total kinetic energy"},
-       {"backend", choice(&Soil::deposition_backend, kDepositionBackends), Need::Optional, {}, {}, always(), {},
-        "the DEM that deposits the settled soil; every DEM backend starts from that one soil file "
+       {"backend", &Soil::deposition_backend, Need::Optional, {}, {}, always(), {},
+        "the DEM backend that deposits the settled soil; every DEM backend starts from that one soil file "
         "(docs/builtin-dem.md, \"Settled soil file\")"}}};
   return s;
 }

@@ -48,14 +48,4 @@ const Interaction& Study::interaction(const std::string& a, const std::string& b
                           "\") in /soil/interactions");
 }
 
-const std::string& depositionBackendName(DepositionBackend backend) {
-  return detail::nameOf(detail::kDepositionBackends, backend);
-}
-
-DepositionBackend parseDepositionBackend(const std::string& name) {
-  for (const auto& [word, value] : detail::kDepositionBackends)
-    if (word == name) return value;
-  throw std::invalid_argument("unknown deposition backend \"" + name + "\" (builtin or liggghts)");
-}
-
 }  // namespace demfem::study

@@ -3,6 +3,8 @@
 #include "demfem/adapter/test_backends.hpp"
 #include "../protocol/fuzz_input.hpp"
 
+#include "support/temp_dir.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <filesystem>
@@ -45,12 +47,6 @@ std::string hello(Server& server, std::uint64_t seq, const p::PeerAddress& from 
   return std::get<p::HelloReply>(reply.body).session;
 }
 
-fs::path freshDir(const std::string& name) {
-  std::random_device rd;
-  const fs::path dir = fs::temp_directory_path() / ("demfem-server-" + name + "-" + std::to_string(rd()));
-  fs::create_directories(dir);
-  return dir;
-}
 
 }  // namespace
 
@@ -154,7 +150,7 @@ TEST_CASE("the test backends refuse a simulate that would wrap their time", "[ad
 }
 
 TEST_CASE("server: checkpoints are names in the server's own directory, never paths", "[adapter]") {
-  const fs::path dir = freshDir("ckpt");
+  const fs::path dir = demfem::support::freshDir("server-ckpt");
   auto api = backend();
   ServerOptions options;
   options.checkpoint_dir = dir / "checkpoints";
@@ -188,7 +184,7 @@ TEST_CASE("server: checkpoints are names in the server's own directory, never pa
 }
 
 TEST_CASE("a corrupted or truncated checkpoint is refused and leaves the backend as it was", "[adapter]") {
-  const fs::path dir = freshDir("corrupt");
+  const fs::path dir = demfem::support::freshDir("server-corrupt");
   auto api = backend();
   api->simulate(0.01);
   NodeArray moved = api->nodePositions("tool");

@@ -2,6 +2,8 @@
 // damaged, truncated and foreign files with the file named, the settledness rule, the figures.
 #include "demfem/adapter/settled_soil.hpp"
 
+#include "support/grain_soil.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -25,7 +27,7 @@ fs::path scratch(const std::string& name) {
 adapter::SettledSoil sample() {
   adapter::SettledSoil soil;
   soil.soil_hash = "0123456789abcdef";
-  soil.backend = study::DepositionBackend::Liggghts;
+  soil.backend = "liggghts";
   soil.seed = 7;
   soil.cores = 2;
   soil.settling = {3.5e-7, 1e-6, 5, 0, false, 2.25, 0.0498, 0.55};
@@ -110,10 +112,7 @@ TEST_CASE("a damaged, truncated or foreign settled-soil file is refused with its
 
 TEST_CASE("a soil of another study or with a layer the study lacks is refused", "[adapter][soil]") {
   study::Study s;
-  s.soil.materials = {{"grain", 2000, 5e7, 0.25, 1e6}, {"steel", 7850, 2e11, 0.3, 1e6}};
-  s.soil.bin_material = "steel";
-  s.soil.layers = {{"grain", 0, s.soil.fill_height_m}};
-  s.soil.interactions = {{"grain", "grain", 0.5, 0.5, 0, 0}, {"grain", "steel", 0.5, 0.5, 0, 0}};
+  s.soil = support::makeSoil({});
   auto soil = sample();
   const auto file = scratch("other.bin");
   adapter::writeSettledSoil(file, soil);

@@ -1,12 +1,12 @@
 // Section 2.3 on synthetic soil-bin runs whose true start, end and means are known by construction.
 #include "demfem/analysis/evaluation.hpp"
 #include "demfem/analysis/synthetic.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
 
 using namespace demfem::analysis;
-using demfem::analysis::test::TempDir;
+using demfem::support::TempDir;
 
 namespace {
 

@@ -1,13 +1,13 @@
 // Reading recordings: formats, sidecars, and the messages for bad input (file, line, column).
 #include "demfem/analysis/recording.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <fstream>
 
 using namespace demfem::analysis;
-using demfem::analysis::test::TempDir;
+using demfem::support::TempDir;
 
 namespace {
 

@@ -1,6 +1,6 @@
 // Discrepancy signatures (analysis/signatures.hpp) recovered from synthetic recordings whose
 // differences are known by construction (analysis/synthetic.hpp).
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 #include "demfem/analysis/signatures.hpp"
 #include "demfem/analysis/synthetic.hpp"
@@ -8,7 +8,7 @@
 #include <catch2/catch.hpp>
 
 using namespace demfem::analysis;
-using demfem::analysis::test::TempDir;
+using demfem::support::TempDir;
 
 namespace {
 

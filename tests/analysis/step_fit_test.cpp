@@ -2,6 +2,7 @@
 // and on long ones, against records generated in closed form (synthetic.hpp) with white noise.
 #include "demfem/analysis/step_fit.hpp"
 #include "demfem/analysis/synthetic.hpp"
+#include "calibrated_signals.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -11,14 +12,8 @@ using namespace demfem::analysis;
 
 namespace {
 
-struct Record {
-  std::vector<double> t, force, deformation;
-};
-
-Record calibratedRecord(const WeightDropTruth& truth) {
-  const SyntheticRecording rec = makeWeightDropRecording(truth, RecordingFormat::Calibrated);
-  return {rec.columns[0], rec.columns[1], rec.columns[2]};
-}
+using test::calibratedSignals;
+using test::Signals;
 
 // A 3 s record whose tail still rings at about half the first overshoot: zeta w_n 3 s = ln 2.
 WeightDropTruth threeSecondRecord(double frequency_Hz, double sample_rate_Hz, std::uint64_t seed) {
@@ -41,7 +36,7 @@ TEST_CASE("a 3 s weight-drop record that still rings gives steady value, frequen
     for (const double rate_Hz : {50.0, 1000.0})
       for (const std::uint64_t seed : {1u, 2u, 3u}) {
         const WeightDropTruth truth = threeSecondRecord(frequency_Hz, rate_Hz, seed);
-        const Record r = calibratedRecord(truth);
+        const Signals r = calibratedSignals(truth);
         INFO("f " << frequency_Hz << " Hz, " << rate_Hz << " Hz sampling, seed " << seed << ", zeta " << truth.damping_ratio);
         const StepResponseFit fit = fitStepResponse(r.t, r.deformation, "deformation");
         CHECK(fit.frequency_Hz == Approx(truth.frequency_Hz).epsilon(0.005));
@@ -63,7 +58,7 @@ TEST_CASE("the fit's standard errors cover the scatter of the estimates over noi
   for (std::uint64_t seed = 1; seed <= 40; ++seed) {
     WeightDropTruth truth = threeSecondRecord(4.0, 50.0, seed);
     truth.noise_fraction = 0.02;
-    const Record r = calibratedRecord(truth);
+    const Signals r = calibratedSignals(truth);
     const StepResponseFit fit = fitStepResponse(r.t, r.force, "force");
     frequencies.push_back(fit.frequency_Hz);
     stated += fit.frequency_error_Hz / 40.0;
@@ -90,7 +85,7 @@ TEST_CASE("15 s weight-drop records with 0.5 % noise give the frequency within 0
       truth.damping_ratio = c.damping_ratio;
       truth.noise_fraction = 0.005;
       truth.seed = seed;
-      const Record r = calibratedRecord(truth);
+      const Signals r = calibratedSignals(truth);
       const StepResponseFit fit = fitStepResponse(r.t, r.force, "force");
       INFO(c.mass_kg << " kg, seed " << seed);
       CHECK(fit.frequency_Hz == Approx(truth.frequency_Hz).epsilon(0.005));
@@ -102,7 +97,7 @@ TEST_CASE("15 s weight-drop records with 0.5 % noise give the frequency within 0
 TEST_CASE("a falling step is fitted like a rising one", "[analysis]") {
   WeightDropTruth truth = threeSecondRecord(3.0, 200.0, 7);
   truth.force_N = -4.5;  // the load cell reads negative
-  const Record r = calibratedRecord(truth);
+  const Signals r = calibratedSignals(truth);
   const StepResponseFit fit = fitStepResponse(r.t, r.force, "force");
   CHECK(fit.steady == Approx(truth.force_N).epsilon(0.002));
   CHECK(fit.frequency_Hz == Approx(truth.frequency_Hz).epsilon(0.005));

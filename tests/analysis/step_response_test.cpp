@@ -2,6 +2,7 @@
 // correlation on synthetic responses with a known frequency and damping ratio.
 #include "demfem/analysis/step_response.hpp"
 #include "demfem/analysis/synthetic.hpp"
+#include "calibrated_signals.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -9,18 +10,8 @@
 
 using namespace demfem::analysis;
 
-namespace {
-
-struct Signals {
-  std::vector<double> t, force, deformation;
-};
-
-Signals calibratedSignals(const WeightDropTruth& truth) {
-  const SyntheticRecording rec = makeWeightDropRecording(truth, RecordingFormat::Calibrated);
-  return {rec.columns[0], rec.columns[1], rec.columns[2]};
-}
-
-}  // namespace
+using test::calibratedSignals;
+using test::Signals;
 
 TEST_CASE("a noisy weight drop gives the fitted figures and their cycle-by-cycle spread (Fig. 8)", "[analysis]") {
   WeightDropTruth truth;  // 3 Hz damped, zeta 0.05, 50 Hz sampling, 0.3 % noise

@@ -2,7 +2,7 @@
 // plots written, nothing left under a final name when something fails.
 #include "demfem/analysis/workflow.hpp"
 #include "demfem/analysis/synthetic.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -10,7 +10,7 @@
 #include <sstream>
 
 using namespace demfem::analysis;
-using demfem::analysis::test::TempDir;
+using demfem::support::TempDir;
 namespace fs = std::filesystem;
 
 namespace {

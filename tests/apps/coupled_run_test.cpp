@@ -257,17 +257,10 @@ namespace {
 // DEM. The settled soil is deposited once into a directory shared by the runs of the test.
 fs::path smallBuiltinStudy(const fs::path& dir) {
   nlohmann::json study = nlohmann::json::parse(readText(fastQuickStudy(dir)));
-  study["soil"]["bin"]["length_mm"] = 140;
-  study["soil"]["bin"]["width_mm"] = 80;
-  study["soil"]["fill_height_mm"] = 40;
-  study["soil"]["layers"][3]["bottom_depth_mm"] = 40;
-  study["tools"][0]["motion"]["velocity_mm_s"] = 100;
-  study["tools"][0]["motion"]["stroke_mm"] = 20;
-  study["tools"][0]["motion"]["start_z_mm"] = 40;
-  const fs::path file = dir / "small_builtin.json";
-  std::ofstream(file) << study.dump(2);
+  useSmallBin(study);
+  useShortStroke(study, 20);
   ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);
-  return file;
+  return writeStudy(study, dir / "small_builtin.json");
 }
 
 }  // namespace

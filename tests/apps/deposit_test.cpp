@@ -11,19 +11,13 @@ namespace {
 
 // quick_liggghts.json on a 120 x 80 mm bin filled to 40 mm (four 10 mm layers): seconds to deposit.
 fs::path smallBinStudy(const fs::path& dir) {
-  nlohmann::json study = nlohmann::json::parse(readText(sourceDir() / "studies" / "quick_liggghts.json"));
-  auto& soil = study["soil"];
-  soil["bin"]["length_mm"] = 120;
-  soil["bin"]["width_mm"] = 80;
-  soil["fill_height_mm"] = 40;
-  soil["layers"][3]["bottom_depth_mm"] = 40;
+  nlohmann::json study = shippedStudyJson("quick_liggghts.json");
+  useSmallBin(study, 120);
   auto& motion = study["tools"][0]["motion"];
   motion["start_z_mm"] = 20;
   motion["stroke_mm"] = 20;
   motion["depth_mm"] = 10;
-  const fs::path file = dir / "small_bin.json";
-  std::ofstream(file) << study.dump(2);
-  return file;
+  return writeStudy(study, dir / "small_bin.json");
 }
 
 nlohmann::json deposit(const fs::path& study, const fs::path& soil_dir, const std::string& backend, const fs::path& log) {
@@ -46,7 +40,7 @@ TEST_CASE("demfem deposit --backend makes one soil file per deposition backend a
   CHECK(liggghts.at("particles").get<int>() > 50);
   const fs::path file = liggghts.at("soil_file").get<std::string>();
   const auto soil = demfem::adapter::readSettledSoil(file);
-  CHECK(soil.backend == demfem::study::DepositionBackend::Liggghts);
+  CHECK(soil.backend == "liggghts");
   CHECK(soil.particles.size() == liggghts.at("particles").get<std::size_t>());
   CHECK(liggghts.at("file_checksum") == demfem::adapter::settledSoilChecksum(file));
 

@@ -19,20 +19,15 @@ fs::path tinyStudy(const fs::path& dir) {
   study["soil"]["bin"]["width_mm"] = 50;
   study["tools"][0]["motion"]["stroke_mm"] = 10;
   study["tools"][0]["motion"]["start_z_mm"] = 40;
-  const fs::path file = dir / "tiny.json";
-  std::ofstream(file) << study.dump(2);
-  return file;
+  return writeStudy(study, dir / "tiny.json");
 }
 
 // studies/weight_drop_1kg.json with the 120 x 20 mm tool for 0.5 s.
 fs::path shortWeightDrop(const fs::path& dir) {
-  nlohmann::json study = nlohmann::json::parse(readText(sourceDir() / "studies" / "weight_drop_1kg.json"));
-  study["tools"][0]["geometry"]["length_mm"] = 120;
-  study["tools"][0]["geometry"]["width_mm"] = 20;
+  nlohmann::json study = shippedStudyJson("weight_drop_1kg.json");
+  useSmallTool(study);
   study["weight_drop"]["duration_s"] = 0.5;
-  const fs::path file = dir / "weight_drop_short.json";
-  std::ofstream(file) << study.dump(2);
-  return file;
+  return writeStudy(study, dir / "weight_drop_short.json");
 }
 
 // Runs `args`, requires exit status 0 and returns standard output parsed as one JSON document

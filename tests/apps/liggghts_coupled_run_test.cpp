@@ -4,6 +4,7 @@
 // demfem-dem) and records the node forces the FEM client received, so the client's outputs can be
 // checked against the DEM's forces. Every wait is bounded; LIGGGHTS may exit() on an error, which
 // the relay reports as a gone server.
+#include "demfem/adapter/forwarding_api.hpp"
 #include "demfem/adapter/remote_proxy.hpp"
 #include "demfem/adapter/server.hpp"
 #include "demfem/fem/model.hpp"
@@ -29,66 +30,45 @@ namespace {
 // tool (250 keypoints) inserted 18 mm deep at 300 mm/s and dragged 40 mm at 100 mm/s (400 FEM steps
 // of 1 ms).
 fs::path smallLiggghtsStudy(const fs::path& dir) {
-  nlohmann::json study = nlohmann::json::parse(readText(sourceDir() / "studies" / "quick_liggghts.json"));
+  nlohmann::json study = shippedStudyJson("quick_liggghts.json");
   study["name"] = "quick_liggghts_small";
-  auto& soil = study["soil"];
-  soil["bin"]["length_mm"] = 140;
-  soil["bin"]["width_mm"] = 80;
-  soil["fill_height_mm"] = 40;
-  soil["layers"][3]["bottom_depth_mm"] = 40;
-  auto& tool = study["tools"][0];
-  tool["geometry"]["length_mm"] = 120;
-  tool["geometry"]["width_mm"] = 20;
-  tool["motion"]["insertion_velocity_mm_s"] = 300;
-  tool["motion"]["velocity_mm_s"] = 100;
-  tool["motion"]["stroke_mm"] = 40;
-  tool["motion"]["start_z_mm"] = 40;
+  useSmallBin(study);
+  useSmallTool(study);
+  useShortStroke(study, 40);
   study["dem"]["backend"] = "liggghts";
-  const fs::path file = dir / "quick_liggghts_small.json";
-  std::ofstream(file) << study.dump(2);
-  return file;
+  return writeStudy(study, dir / "quick_liggghts_small.json");
 }
 
 // Forwards every call to the DEM server and records what the FEM client sent and received.
-class RecordingRelay final : public adapter::CouplingApi {
+class RecordingRelay final : public adapter::ForwardingApi {
  public:
-  explicit RecordingRelay(adapter::CouplingApi& dem) : dem_(dem) {}
+  explicit RecordingRelay(adapter::CouplingApi& dem) : ForwardingApi(dem) {}
 
-  adapter::BackendInfo info() override { return dem_.info(); }
-  std::vector<adapter::GeometryInfo> geometries() override { return dem_.geometries(); }
-  double time() override { return dem_.time(); }
   adapter::NodeArray nodePositions(const std::string& geometry) override {
-    auto xyz = dem_.nodePositions(geometry);
+    auto xyz = inner().nodePositions(geometry);
     if (undeformed.empty()) undeformed = xyz;
     return xyz;
   }
   adapter::NodeArray nodeForces(const std::string& geometry, adapter::ForceMode mode) override {
-    auto f = dem_.nodeForces(geometry, mode);
+    auto f = inner().nodeForces(geometry, mode);
     if (mode == adapter::ForceMode::IntervalMean) interval_forces.push_back(f);
     return f;
   }
   void setNodePositions(const std::string& geometry, const adapter::NodeArray& xyz) override {
-    dem_.setNodePositions(geometry, xyz);
+    inner().setNodePositions(geometry, xyz);
     last_set_positions = xyz;
   }
-  void simulate(double duration_s) override { dem_.simulate(duration_s); }
-  adapter::RigidMotion rigidMotion(const std::string& geometry) override { return dem_.rigidMotion(geometry); }
-  void setRigidMotion(const std::string& geometry, const adapter::RigidMotion& motion) override {
-    dem_.setRigidMotion(geometry, motion);
-  }
-  void checkpoint(const std::filesystem::path& file) override { dem_.checkpoint(file); }
-  void restore(const std::filesystem::path& file) override { dem_.restore(file); }
   // Before the DEM server shuts down: the keypoints it holds are the ones the FEM client last set.
   void shutdown() override {
     if (!shut_down && !last_set_positions.empty()) {
       try {
-        positions_at_end = dem_.nodePositions(kTool);
+        positions_at_end = inner().nodePositions(kTool);
       } catch (const std::exception& e) {  // the server must still be shut down; the test reports it
         read_back_error = e.what();
       }
     }
     shut_down = true;
-    dem_.shutdown();
+    inner().shutdown();
   }
 
   static constexpr const char* kTool = "PMMA";  // the tool of studies/quick_liggghts.json
@@ -96,9 +76,6 @@ class RecordingRelay final : public adapter::CouplingApi {
   std::vector<adapter::NodeArray> interval_forces;  // one per coupling cycle, in call order
   std::string read_back_error;
   bool shut_down = false;
-
- private:
-  adapter::CouplingApi& dem_;
 };
 
 // z component summed over the keypoints (N, tool frame = bin frame axes).
@@ -241,10 +218,9 @@ TEST_CASE("studies/quick_liggghts.json runs through demfem run on both DEM backe
   // The study file itself (bin, layers, laws, tool; deposition included), with the insertion sped up
   // to 300 mm/s and the run cut to its first 200 FEM steps, so both runs fit the test budget.
   const fs::path dir = freshDir("quick-liggghts-both");
-  nlohmann::json study = nlohmann::json::parse(readText(sourceDir() / "studies" / "quick_liggghts.json"));
+  nlohmann::json study = shippedStudyJson("quick_liggghts.json");
   study["tools"][0]["motion"]["insertion_velocity_mm_s"] = 300;
-  const fs::path study_file = dir / "quick_liggghts.json";
-  std::ofstream(study_file) << study.dump(2);
+  const fs::path study_file = writeStudy(study, dir / "quick_liggghts.json");
   ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);
   const int steps = 200;
   // Insertion: tip from one largest diameter above the fill to the depth, in whole FEM steps.

@@ -77,16 +77,26 @@ TEST_CASE("demfem run starts both processes over ipc and marks a run cut by --st
   fs::remove_all(dir);
 }
 
-TEST_CASE("Ctrl-C on demfem run stops both processes and marks the outputs incomplete", "[apps]") {
-  const fs::path dir = freshDir("local-run-int");
-  const fs::path study = fastQuickStudy(dir);
-  Process run({app("demfem"), "run", study.string(), "--backend", "harmonic", "--output", (dir / "out").string(), "--quiet"},
-              dir / "demfem");
+namespace {
+
+// Returns once the run's dir/out/sensors.csv.partial holds more than 1000 bytes (within 120 s);
+// the run must still be running then.
+void waitForSensors(Process& run, const fs::path& dir) {
   const fs::path partial = dir / "out" / "sensors.csv.partial";
   const auto deadline = std::chrono::steady_clock::now() + 120s;
   while (!(fs::exists(partial) && fs::file_size(partial) > 1000) && !run.exited() && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(10ms);
   REQUIRE_FALSE(run.exited());
+}
+
+}  // namespace
+
+TEST_CASE("Ctrl-C on demfem run stops both processes and marks the outputs incomplete", "[apps]") {
+  const fs::path dir = freshDir("local-run-int");
+  const fs::path study = fastQuickStudy(dir);
+  Process run({app("demfem"), "run", study.string(), "--backend", "harmonic", "--output", (dir / "out").string(), "--quiet"},
+              dir / "demfem");
+  waitForSensors(run, dir);
   run.signal(SIGINT);
   const int status = run.wait(30s);
   CHECK(WIFSIGNALED(status));
@@ -103,11 +113,7 @@ TEST_CASE("SIGKILL on demfem run takes both children down, and the next run remo
   const fs::path study = fastQuickStudy(dir);
   Process run({app("demfem"), "run", study.string(), "--backend", "harmonic", "--output", (dir / "out").string(), "--quiet"},
               dir / "demfem");
-  const fs::path partial = dir / "out" / "sensors.csv.partial";
-  const auto deadline = std::chrono::steady_clock::now() + 120s;
-  while (!(fs::exists(partial) && fs::file_size(partial) > 1000) && !run.exited() && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(10ms);
-  REQUIRE_FALSE(run.exited());
+  waitForSensors(run, dir);
   const fs::path work = runDirectoryOf(run.pid());
   REQUIRE_FALSE(work.empty());
   CHECK((fs::status(work).permissions() & (fs::perms::group_all | fs::perms::others_all)) == fs::perms::none);

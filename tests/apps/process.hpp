@@ -1,6 +1,9 @@
 // Test helper: start an executable with posix_spawn (stdout/stderr to files), wait with a bound.
 #pragma once
 
+#include "support/small_study.hpp"
+#include "support/temp_dir.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <fcntl.h>
@@ -13,7 +16,6 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -30,12 +32,12 @@ using namespace std::chrono_literals;
 inline fs::path binaryDir() { return DEMFEM_BINARY_DIR; }
 inline fs::path sourceDir() { return DEMFEM_SOURCE_DIR; }
 inline std::string app(const std::string& name) { return (binaryDir() / "apps" / name).string(); }
-
-inline fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("demfem-" + name + "-" + std::to_string(std::random_device{}()));
-  fs::create_directories(dir);
-  return dir;
-}
+using support::freshDir;
+using support::shippedStudyJson;
+using support::useShortStroke;
+using support::useSmallBin;
+using support::useSmallTool;
+using support::writeStudy;
 
 inline std::string readText(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -117,13 +119,10 @@ inline std::string endpointFrom(const fs::path& file) {
 // A copy of studies/quick.json made cheap for tests, written to `dir`: a 120 x 20 mm tool (5 x 25 x 2 =
 // 250 keypoints; clamp, load-cell and sensor lines as in the paper) inserted at 300 mm/s.
 inline fs::path fastQuickStudy(const fs::path& dir) {
-  nlohmann::json study = nlohmann::json::parse(readText(sourceDir() / "studies" / "quick.json"));
-  study["tools"][0]["geometry"]["length_mm"] = 120;
-  study["tools"][0]["geometry"]["width_mm"] = 20;
+  nlohmann::json study = shippedStudyJson("quick.json");
+  useSmallTool(study);
   study["tools"][0]["motion"]["insertion_velocity_mm_s"] = 300;
-  const fs::path file = dir / "quick_fast.json";
-  std::ofstream(file) << study.dump(2);
-  return file;
+  return writeStudy(study, dir / "quick_fast.json");
 }
 
 // Rows of a sensor CSV (header and '#' lines skipped).

@@ -8,6 +8,7 @@
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/weight_drop.hpp"
 #include "demfem/study/study.hpp"
+#include "support/temp_dir.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -16,7 +17,6 @@
 #include <fstream>
 #include <random>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 namespace demfem::campaign::test {
@@ -30,24 +30,7 @@ inline nlohmann::ordered_json fixtureStudyJson() {
   return nlohmann::ordered_json::parse(in);
 }
 
-class TempDir {
- public:
-  explicit TempDir(const std::string& name)
-      : path_(std::filesystem::temp_directory_path() / ("demfem-campaign-" + name + "-" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using TempDir = support::TempDir;
 
 struct TruthSettings {
   double E_Pa = 4.5e9;

@@ -30,12 +30,7 @@ double proppedReaction(double P, double L, double a, double EI, double k) {
 TEST_CASE("a cantilever on a rotational clamp spring deflects by F L^3 / 3EI + F L^2 / k", "[fem]") {
   // 340 x 10 x 4 mm steel strip, free length 300 mm (L/h = 75) as in the rigid clamp's
   // Euler-Bernoulli test; the load-cell line on the clamp edge adds nothing. Tolerance 2 % as there.
-  study::Tool strip = testing::steelTool();
-  strip.geometry.length_m = 0.340;
-  strip.geometry.width_m = 0.010;
-  strip.geometry.thickness_m = 0.004;
-  strip.constraints.clamp_length_m = 0.040;
-  strip.constraints.load_cell_from_top_m = 0.040;
+  study::Tool strip = testing::eulerBernoulliStrip();
   const double F = 1.0, L = 0.300, EI = bendingStiffness(strip);
   for (double factor : {1.0, 10.0}) {
     const double k = factor * EI / L;

@@ -1,10 +1,13 @@
 // The coupled driver against an in-process analytic backend (no processes, no sockets).
+#include "demfem/adapter/forwarding_api.hpp"
 #include "demfem/adapter/test_backends.hpp"
 #include "demfem/fem/coupled_driver.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/sensors.hpp"
 #include "demfem/study/study.hpp"
 #include "demfem/study/tool_motion.hpp"
+#include "support/small_study.hpp"
+#include "test_backend_run.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -18,39 +21,24 @@ using namespace demfem;
 namespace {
 
 // Forwards to a test backend and records every rigid motion the driver sets.
-class RecordingBackend : public adapter::CouplingApi {
+class RecordingBackend final : public adapter::ForwardingApi {
  public:
-  explicit RecordingBackend(std::unique_ptr<adapter::CouplingApi> inner) : inner_(std::move(inner)) {}
+  explicit RecordingBackend(std::unique_ptr<adapter::CouplingApi> backend) : ForwardingApi(*backend), backend_(std::move(backend)) {}
   std::vector<adapter::RigidMotion> motions;
 
-  adapter::BackendInfo info() override { return inner_->info(); }
-  std::vector<adapter::GeometryInfo> geometries() override { return inner_->geometries(); }
-  double time() override { return inner_->time(); }
-  adapter::NodeArray nodePositions(const std::string& g) override { return inner_->nodePositions(g); }
-  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { return inner_->nodeForces(g, m); }
-  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { inner_->setNodePositions(g, x); }
-  void simulate(double d) override { inner_->simulate(d); }
-  adapter::RigidMotion rigidMotion(const std::string& g) override { return inner_->rigidMotion(g); }
   void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override {
     motions.push_back(m);
-    inner_->setRigidMotion(g, m);
+    inner().setRigidMotion(g, m);
   }
-  void checkpoint(const std::filesystem::path& f) override { inner_->checkpoint(f); }
-  void restore(const std::filesystem::path& f) override { inner_->restore(f); }
-  void shutdown() override { inner_->shutdown(); }
 
  private:
-  std::unique_ptr<adapter::CouplingApi> inner_;
+  std::unique_ptr<adapter::CouplingApi> backend_;
 };
 
 // studies/quick.json with a small tool (120 x 20 mm) so the reduction is quick.
 study::Study smallQuickStudy() {
-  std::ifstream in(std::filesystem::path(DEMFEM_SOURCE_DIR) / "studies" / "quick.json");
-  std::stringstream text;
-  text << in.rdbuf();
-  auto doc = nlohmann::json::parse(text.str());
-  doc["tools"][0]["geometry"]["length_mm"] = 120;
-  doc["tools"][0]["geometry"]["width_mm"] = 20;
+  auto doc = demfem::support::shippedStudyJson("quick.json");
+  demfem::support::useSmallTool(doc);
   return study::parseStudy(doc.dump(), "quick.json (small tool)");
 }
 
@@ -94,18 +82,8 @@ namespace {
 // Runs the driver on the constant test backend (10 N against travel on the tip row) for the
 // insertion and `drag_rows` drag steps; returns the sensors.csv load-cell column.
 std::vector<double> loadCellColumn(const study::Study& study, const std::filesystem::path& out, int drag_rows) {
-  auto dem = adapter::makeTestBackend("constant", study.tools, adapter::TestLoad{});
-  fem::CoupledRunOptions options;
-  options.output_dir = out;
-  options.max_steps = study::planToolMotion(study, study.tools[0]).insertion_steps + drag_rows;
-  fem::CoupledDriver(study, options).run(*dem);
-  std::ifstream in(out / "sensors.csv");
-  std::string line;
-  std::getline(in, line);
-  std::vector<double> force;
-  while (std::getline(in, line))
-    if (line[0] != '#') force.push_back(std::stod(line.substr(line.find(',', line.find(',') + 1) + 1)));
-  return force;
+  fem::testing::runOnTestBackend(study, "constant", adapter::TestLoad{}, out, drag_rows);
+  return fem::testing::readSensorColumns(out / "sensors.csv").force;
 }
 
 }  // namespace

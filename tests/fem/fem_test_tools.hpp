@@ -7,36 +7,30 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <string>
 
 namespace demfem::fem::testing {
 
-// 200 x 40 x 4 mm PMMA tool, Table 3 (E calibrated 4.06 GPa, nu 0.38, rho 1220 kg/m^3).
-inline study::Tool pmmaTool() {
+// A 200 x 40 mm tool of the paper (Section 2.2/2.9, Table 3): thickness, FEM material and the
+// Rayleigh mass-proportional damping alpha 0.55 ms.
+inline study::Tool paperTool(const std::string& name, double thickness_m, double youngs_Pa, double poisson, double density_kg_m3) {
   study::Tool t;
-  t.name = "PMMA";
+  t.name = name;
   t.geometry.length_m = 0.200;
   t.geometry.width_m = 0.040;
-  t.geometry.thickness_m = 0.004;
-  t.fem.youngs_Pa = 4.06e9;
-  t.fem.poisson = 0.38;
-  t.fem.density_kg_m3 = 1220;
+  t.geometry.thickness_m = thickness_m;
+  t.fem.youngs_Pa = youngs_Pa;
+  t.fem.poisson = poisson;
+  t.fem.density_kg_m3 = density_kg_m3;
   t.fem.alpha_s = 0.55e-3;
   return t;
 }
 
+// 200 x 40 x 4 mm PMMA tool, Table 3 (E calibrated 4.06 GPa, nu 0.38, rho 1220 kg/m^3).
+inline study::Tool pmmaTool() { return paperTool("PMMA", 0.004, 4.06e9, 0.38, 1220); }
+
 // 200 x 40 x 3 mm S235 tool, Table 3 (E 207 GPa, nu 0.3, rho 7933 kg/m^3).
-inline study::Tool steelTool() {
-  study::Tool t;
-  t.name = "S235";
-  t.geometry.length_m = 0.200;
-  t.geometry.width_m = 0.040;
-  t.geometry.thickness_m = 0.003;
-  t.fem.youngs_Pa = 2.07e11;
-  t.fem.poisson = 0.3;
-  t.fem.density_kg_m3 = 7933;
-  t.fem.alpha_s = 0.55e-3;
-  return t;
-}
+inline study::Tool steelTool() { return paperTool("S235", 0.003, 2.07e11, 0.3, 7933); }
 
 // A small steel strip (100 x 10 x 4 mm, 126 keypoints) for long time-integration runs: clamped over
 // the top 20 mm, load cell 30 mm below the top, sensor 50 mm below the top.
@@ -50,6 +44,18 @@ inline study::Tool smallStrip() {
   t.constraints.load_cell_from_top_m = 0.030;
   t.constraints.sensor_from_top_m = 0.050;
   return t;
+}
+
+// A long thin steel strip for the Euler-Bernoulli checks: 340 x 10 x 4 mm, clamped over the top
+// 40 mm (free length 300 mm, L/h = 75), the load-cell line on the clamp edge so it adds nothing.
+inline study::Tool eulerBernoulliStrip() {
+  study::Tool strip = steelTool();
+  strip.geometry.length_m = 0.340;
+  strip.geometry.width_m = 0.010;
+  strip.geometry.thickness_m = 0.004;
+  strip.constraints.clamp_length_m = 0.040;
+  strip.constraints.load_cell_from_top_m = 0.040;
+  return strip;
 }
 
 // Keypoint forces: `total_N` along -z spread evenly over the keypoints of the tip row (y = 0).

@@ -2,6 +2,8 @@
 // (ThreeLevelIntegrator, itself checked against closed forms in integrator_test.cpp), and the spring
 // Ritz basis against the direct eigen and static solutions of each clamp spring.
 #include "fem_test_tools.hpp"
+#include "support/small_study.hpp"
+#include "test_backend_run.hpp"
 
 #include "demfem/adapter/test_backends.hpp"
 #include "demfem/fem/coupled_driver.hpp"
@@ -147,44 +149,21 @@ TEST_CASE("a saved modal integration state resumes the run bit for bit", "[fem]"
 namespace {
 
 study::Study smallQuickStudy(const std::string& integration) {
-  std::ifstream in(std::filesystem::path(DEMFEM_SOURCE_DIR) / "studies" / "quick.json");
-  std::stringstream text;
-  text << in.rdbuf();
-  auto doc = nlohmann::json::parse(text.str());
-  doc["tools"][0]["geometry"]["length_mm"] = 120;
-  doc["tools"][0]["geometry"]["width_mm"] = 20;
+  auto doc = demfem::support::shippedStudyJson("quick.json");
+  demfem::support::useSmallTool(doc);
   doc["fem"]["integration"] = integration;
   return study::parseStudy(doc.dump(), "quick.json (small tool, " + integration + " integration)");
 }
 
-// Columns force_N and deformation_mm of a run's sensors.csv.
-Channels sensorColumns(const std::filesystem::path& csv) {
-  std::ifstream in(csv);
-  std::string line;
-  std::getline(in, line);
-  REQUIRE(line == "t_s,displacement_mm,force_N,deformation_mm,tilt_deg");
-  Channels c;
-  while (std::getline(in, line)) {
-    if (line[0] == '#') continue;
-    std::vector<double> v;
-    std::stringstream s(line);
-    for (std::string cell; std::getline(s, cell, ',');) v.push_back(std::stod(cell));
-    c.force.push_back(v.at(2));
-    c.deformation.push_back(v.at(3));
-  }
-  return c;
-}
-
+// Columns force_N and deformation_mm of the run's sensors.csv, on the harmonic test backend.
 Channels harmonicRun(const std::string& integration, const std::filesystem::path& out) {
   const study::Study study = smallQuickStudy(integration);
   adapter::TestLoad load;
   load.frequency_Hz = 45;  // near the small tool's first mode: a strongly dynamic response
-  auto dem = adapter::makeTestBackend("harmonic", study.tools, load);
-  CoupledRunOptions options;
-  options.output_dir = out;
-  options.max_steps = study::planToolMotion(study, study.tools[0]).insertion_steps + 300;
-  CoupledDriver(study, options).run(*dem);
-  return sensorColumns(out / "sensors.csv");
+  testing::runOnTestBackend(study, "harmonic", load, out, 300);
+  const testing::SensorColumns c = testing::readSensorColumns(out / "sensors.csv");
+  REQUIRE(c.header == "t_s,displacement_mm,force_N,deformation_mm,tilt_deg");
+  return {c.force, c.deformation};
 }
 
 }  // namespace

@@ -20,12 +20,7 @@ TEST_CASE("a long thin clamped strip under a tip load bends as Euler-Bernoulli p
   // load-cell line is put on the clamp edge so it adds nothing. One Hex20 element through the 4 mm
   // thickness, 5 mm in plane, as in the paper's grid. Tolerance 2 %; shear deformation
   // adds (E/kG)(h/L)^2/4 ~ 1e-4 and the clamp's Poisson restraint a little more.
-  study::Tool strip = testing::steelTool();
-  strip.geometry.length_m = 0.340;
-  strip.geometry.width_m = 0.010;
-  strip.geometry.thickness_m = 0.004;
-  strip.constraints.clamp_length_m = 0.040;
-  strip.constraints.load_cell_from_top_m = 0.040;
+  const study::Tool strip = testing::eulerBernoulliStrip();
   for (HexIntegration integration : {HexIntegration::Reduced, HexIntegration::Full}) {
     const ReducedModel model = reduce(buildPlateModel(strip, integration));
     const double F = 1.0, L = 0.300;

@@ -1,11 +1,12 @@
 #include "demfem/protocol/transport.hpp"
 
+#include "support/temp_dir.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <thread>
 
 using namespace demfem::protocol;
@@ -25,17 +26,11 @@ std::thread echo(ServerSocket& server, int count, std::chrono::milliseconds wait
   });
 }
 
-fs::path freshDir(const std::string& name) {
-  std::random_device rd;
-  const fs::path dir = fs::temp_directory_path() / ("demfem-" + name + "-" + std::to_string(rd()));
-  fs::create_directories(dir);
-  return dir;
-}
 
 }  // namespace
 
 TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]") {
-  const fs::path dir = freshDir("ipc");
+  const fs::path dir = demfem::support::freshDir("ipc");
   for (const std::string& endpoint : {std::string("inproc://transport-test"), "ipc://" + (dir / "s").string(),
                                      std::string("tcp://127.0.0.1:*")}) {
     demfem::protocol::Context context;
@@ -92,7 +87,7 @@ TEST_CASE("a server receive returns nothing after its timeout", "[protocol]") {
 }
 
 TEST_CASE("binding ipc never deletes a file that is not a socket", "[protocol]") {
-  const fs::path dir = freshDir("ipc-file");
+  const fs::path dir = demfem::support::freshDir("ipc-file");
   const fs::path precious = dir / "precious.txt";
   { std::ofstream(precious) << "keep me\n"; }
   demfem::protocol::Context context;
@@ -135,7 +130,7 @@ TEST_CASE("binding tcp to a non-loopback address needs CurveZMQ keys", "[protoco
 }
 
 TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is refused", "[protocol]") {
-  const fs::path keys = freshDir("keys"), other = freshDir("other-keys");
+  const fs::path keys = demfem::support::freshDir("keys"), other = demfem::support::freshDir("other-keys");
   writeCurveKeyDirectory(keys);
   writeCurveKeyDirectory(other);
   CHECK((fs::status(keys / "client.secret").permissions() & fs::perms::others_read) == fs::perms::none);
@@ -166,7 +161,7 @@ TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is re
 }
 
 TEST_CASE("a missing or malformed key file is named in the error", "[protocol]") {
-  const fs::path dir = freshDir("badkeys");
+  const fs::path dir = demfem::support::freshDir("badkeys");
   CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("server.pub"));
   writeCurveKeyDirectory(dir);
   { std::ofstream(dir / "client.pub") << "short\n"; }

@@ -1,43 +1,13 @@
 #include "demfem/cli/soil_supply.hpp"
 
-#include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/cli/cli_support.hpp"
-#include "demfem/cli/progress.hpp"
-#if DEMFEM_WITH_LIGGGHTS
-#include "demfem/backends/liggghts/backend.hpp"
-#endif
-
-#include <iostream>
 
 namespace demfem::cli {
 
-adapter::SettledSoil depositWith(study::DepositionBackend backend, const study::Study& study, int cores,
-                                 DepositCost& cost, bool quiet) {
-  Progress progress("deposition", !quiet);
-  switch (backend) {
-    case study::DepositionBackend::Builtin: {
-      builtin::DepositReport report;
-      auto soil = builtin::depositSoil(study, cores, report, [&](double fraction, const std::string& stage_line) {
-        if (!stage_line.empty() && !quiet) std::cerr << "deposition: " << stage_line << std::endl;
-        progress.update(fraction);
-      });
-      progress.finish(std::to_string(soil.particles.size()) + " particles");
-      cost = {report.steps, report.time_step_s};
-      return soil;
-    }
-    case study::DepositionBackend::Liggghts: {
-#if DEMFEM_WITH_LIGGGHTS
-      cost = {};
-      if (!quiet) std::cerr << "deposition: with LIGGGHTS (one insert/pack per layer, one settling)" << std::endl;
-      auto soil = liggghts::depositSoil(study);
-      progress.finish(std::to_string(soil.particles.size()) + " particles");
-      return soil;
-#else
-      throw InputError("this demfem was built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF): cannot deposit with liggghts");
-#endif
-    }
-  }
-  throw std::logic_error("depositWith: unknown deposition backend");
+adapter::SettledSoil depositWith(const std::string& backend, const study::Study& study, int cores, DepositCost& cost, bool quiet) {
+  const BackendEntry& entry = findBackend(backend);
+  if (!entry.deposit) throw InputError("the " + backend + " backend simulates no particles: it cannot deposit a soil");
+  return entry.deposit(study, cores, cost, quiet);
 }
 
 void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::path& file, bool allow_unsettled) {

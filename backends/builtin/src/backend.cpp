@@ -259,10 +259,10 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, con
   try {
     const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
     if (!std::filesystem::exists(file)) {
-      if (study.soil.deposition_backend != study::DepositionBackend::Builtin)
+      if (study.soil.deposition_backend != capabilities().name)
         throw CouplingError(ErrorCode::BadRequest,
                             "builtin DEM: no settled soil " + file.string() + "; the study deposits it with " +
-                                study::depositionBackendName(study.soil.deposition_backend) +
+                                study.soil.deposition_backend +
                                 " (/soil/deposition/backend): run `demfem deposit` on the study first");
       DepositReport report;
       adapter::writeSettledSoil(file, depositSoil(study, study.dem.threads, report, deposit_progress));

@@ -1,4 +1,5 @@
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/backends/builtin/backend.hpp"
 
 #include <algorithm>
 #include <array>
@@ -184,7 +185,7 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
   }
 
   out.soil_hash = study::soilHash(study);
-  out.backend = study::DepositionBackend::Builtin;
+  out.backend = capabilities().name;
   out.seed = soil.deposition_seed;
   out.cores = threads;
   for (std::size_t i = 0; i < sim.particleCount(); ++i) {

@@ -307,10 +307,10 @@ class Engine {
       throw CouplingError(ErrorCode::BadRequest, worldRank() == 0 ? problem : "rank 0 cannot read " + soil_file_.string());
     soil_deposited_ = status == static_cast<int>(SoilFileStatus::Missing);
     if (soil_deposited_) {
-      if (study.soil.deposition_backend != study::DepositionBackend::Liggghts)
+      if (study.soil.deposition_backend != capabilities().name)
         throw CouplingError(ErrorCode::BadRequest,
                             "liggghts backend: no settled soil " + soil_file_.string() + "; the study deposits it with " +
-                                study::depositionBackendName(study.soil.deposition_backend) +
+                                study.soil.deposition_backend +
                                 " (/soil/deposition/backend): run `demfem deposit` on the study first");
       soil = depositInInstance(study, deck, work_dir_);
       int written = 1;

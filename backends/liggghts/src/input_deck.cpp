@@ -18,6 +18,8 @@ namespace {
 using adapter::CouplingError;
 using adapter::ErrorCode;
 
+constexpr double kGravity_m_s2 = 9.81;  // along -y
+
 // Values for type pairs that never touch (bin wall against a tool, a tool against another tool).
 // LIGGGHTS wants every pair in its tables and rejects a restitution of 0.
 constexpr double kNeverTouchingRestitution = 0.5;
@@ -289,11 +291,12 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   const double w = soil.bin_width_m;
   const double r_max = soil.diameter_max_m / 2;
   const double stretch = kSettledSolidFraction / kInsertSolidFraction;
-  deck.insertion_top_m = stretch * soil.fill_height_m + soil.diameter_max_m;
+  const double insertion_top_m = stretch * soil.fill_height_m + soil.diameter_max_m;
+  deck.fall_time_s = std::sqrt(2 * insertion_top_m / kGravity_m_s2);
 
   // Box: the bin, the insertion stack and every tool over its whole stroke (a mesh element outside
   // the box is a fatal LIGGGHTS error), with a margin.
-  double z_lo = 0, z_hi = soil.bin_length_m, y_hi = deck.insertion_top_m, x_lo = 0, x_hi = w;
+  double z_lo = 0, z_hi = soil.bin_length_m, y_hi = insertion_top_m, x_lo = 0, x_hi = w;
   for (std::size_t i = 0; i < study.tools.size(); ++i) {
     const auto& tool = study.tools[i];
     const auto origin = toolStartOrigin(study, i);
@@ -354,7 +357,7 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   s.push_back("pair_style gran " + model);
   s.push_back("pair_coeff * *");
   s.push_back("timestep " + num(deck.time_step_s));
-  s.push_back("fix gravity all gravity 9.81 vector 0 -1 0");
+  s.push_back("fix gravity all gravity " + num(kGravity_m_s2) + " vector 0 -1 0");
 
   // Bin: floor, side walls and end walls as primitive planes of the bin material.
   const std::string wall = "all wall/gran " + model + " primitive type " +

@@ -18,7 +18,6 @@ namespace {
 using adapter::CouplingError;
 using adapter::ErrorCode;
 
-constexpr double kGravity = 9.81;
 // Deposition: kinetic energy is checked every kSettleCheck_s of simulated time; settling that takes
 // longer than kSettleLimit_s (after the particles had time to fall) is reported as a failure.
 constexpr double kSettleCheck_s = 0.01;
@@ -107,7 +106,7 @@ adapter::SettledSoil depositInInstance(const study::Study& study, const InputDec
   for (const auto& line : deck.deposition) deposition.command(line);
   const double dt = deck.time_step_s;
   const auto chunk = std::max<long long>(1, std::llround(kSettleCheck_s / dt));
-  const double fall_time = 2 * std::sqrt(2 * deck.insertion_top_m / kGravity);
+  const double fall_time = 2 * deck.fall_time_s;
   double t = 0, energy = 0;
   bool capped = false;
   while (true) {
@@ -126,7 +125,7 @@ adapter::SettledSoil depositInInstance(const study::Study& study, const InputDec
   for (const auto& line : deck.trim) deposition.command(line);
   adapter::SettledSoil soil = toNeutral(study, gatherParticles(deposition.get()));
   soil.soil_hash = study::soilHash(study);
-  soil.backend = study::DepositionBackend::Liggghts;
+  soil.backend = capabilities().name;
   soil.seed = study.soil.deposition_seed;
   soil.cores = worldSize();
   soil.settling.kinetic_energy_J = energy;

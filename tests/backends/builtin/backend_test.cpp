@@ -87,7 +87,7 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
       const double depth = st.soil.fill_height_m - p.x_m[1];
       if (std::fabs(depth - 0.01) > 2e-4) CHECK(p.layer == (depth < 0.01 ? 0 : 1));
     }
-    CHECK(soil.backend == study::DepositionBackend::Builtin);
+    CHECK(soil.backend == "builtin");
     CHECK(soil.seed == st.soil.deposition_seed);
     CHECK(soil.settling.stages == static_cast<int>(st.soil.layers.size()) + 1);
     CHECK(soil.settling.threshold_J == st.soil.settle_kinetic_energy_J);

@@ -5,6 +5,9 @@
 #include "demfem/fem/coupled_driver.hpp"
 #include "demfem/study/study.hpp"
 #include "demfem/study/tool_motion.hpp"
+#include "support/motion_recorder.hpp"
+#include "support/small_study.hpp"
+#include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -14,7 +17,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <random>
 #include <sstream>
 
 using namespace demfem;
@@ -29,23 +31,16 @@ std::string readText(const fs::path& file) {
   return s.str();
 }
 
-// studies/quick.json made small: a 140 x 80 mm bin filled 40 mm deep (about 500 particles), a
-// 120 x 20 mm tool off the bin's centre line (x = 45 mm), inserted at 300 mm/s and dragged 10 mm at
-// 100 mm/s: 95 + 100 FEM steps of 1 ms. The settled soil is shared by the runs of this file.
+// studies/quick.json made small (support/small_study.hpp): a 140 x 80 mm bin filled 40 mm deep
+// (about 500 particles), a 120 x 20 mm tool off the bin's centre line (x = 45 mm), inserted at
+// 300 mm/s and dragged 10 mm at 100 mm/s: 95 + 100 FEM steps of 1 ms. The settled soil is shared by
+// the runs of this file.
 study::Study smallCoupledStudy(const fs::path& out) {
-  auto doc = nlohmann::json::parse(readText(fs::path(DEMFEM_SOURCE_DIR) / "studies" / "quick.json"));
-  doc["soil"]["bin"]["length_mm"] = 140;
-  doc["soil"]["bin"]["width_mm"] = 80;
-  doc["soil"]["fill_height_mm"] = 40;
-  doc["soil"]["layers"][3]["bottom_depth_mm"] = 40;
-  auto& tool = doc["tools"][0];
-  tool["geometry"]["length_mm"] = 120;
-  tool["geometry"]["width_mm"] = 20;
-  tool["motion"]["insertion_velocity_mm_s"] = 300;
-  tool["motion"]["velocity_mm_s"] = 100;
-  tool["motion"]["stroke_mm"] = 10;
-  tool["motion"]["start_z_mm"] = 40;
-  tool["motion"]["center_x_mm"] = 45;
+  auto doc = support::shippedStudyJson("quick.json");
+  support::useSmallBin(doc);
+  support::useSmallTool(doc);
+  support::useShortStroke(doc, 10);
+  doc["tools"][0]["motion"]["center_x_mm"] = 45;
   doc["output"]["vtk_every"] = 10;
   doc["output"]["directory"] = out.string();
   const fs::path soil = fs::temp_directory_path() / "demfem-builtin-coupled-test-soil";
@@ -53,48 +48,6 @@ study::Study smallCoupledStudy(const fs::path& out) {
   ::setenv("DEMFEM_SOIL_DIR", soil.c_str(), 1);
   return study::parseStudy(doc.dump(), "quick.json (small bin, builtin coupled test)");
 }
-
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("demfem-" + name + "-" + std::to_string(std::random_device{}()));
-  fs::create_directories(dir);
-  return dir;
-}
-
-// Forwards to the backend and records the tool tip's bin height after construction and after
-// every simulate() (the rigid motion the DEM moves its mesh by, at its clock).
-class HeightRecorder final : public adapter::CouplingApi {
- public:
-  HeightRecorder(adapter::CouplingApi& dem, std::string tool) : dem_(dem), tool_(std::move(tool)) { record(); }
-  std::vector<double> heights_m;
-  adapter::RigidMotion initial;
-  double initial_time_s = -1;
-
-  adapter::BackendInfo info() override { return dem_.info(); }
-  std::vector<adapter::GeometryInfo> geometries() override { return dem_.geometries(); }
-  double time() override { return dem_.time(); }
-  adapter::NodeArray nodePositions(const std::string& g) override { return dem_.nodePositions(g); }
-  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { return dem_.nodeForces(g, m); }
-  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { dem_.setNodePositions(g, x); }
-  void simulate(double d) override {
-    dem_.simulate(d);
-    record();
-  }
-  adapter::RigidMotion rigidMotion(const std::string& g) override { return dem_.rigidMotion(g); }
-  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { dem_.setRigidMotion(g, m); }
-  void checkpoint(const fs::path& f) override { dem_.checkpoint(f); }
-  void restore(const fs::path& f) override { dem_.restore(f); }
-  void shutdown() override { dem_.shutdown(); }
-
- private:
-  void record() {
-    const auto m = dem_.rigidMotion(tool_);
-    const double t = dem_.time();
-    if (initial_time_s < 0) initial = m, initial_time_s = t;
-    heights_m.push_back(m.origin_m[1] + m.velocity_m_s[1] * (t - m.t0_s));
-  }
-  adapter::CouplingApi& dem_;
-  std::string tool_;
-};
 
 // POINTS of a legacy VTK polydata file (x y z per point).
 std::vector<double> vtkPoints(const fs::path& file) {
@@ -127,14 +80,14 @@ std::map<std::string, double> pvdEntries(const fs::path& file) {
 
 TEST_CASE("a coupled run on the builtin DEM moves the tool once: down from the plan's start to the depth, never up",
           "[builtin][fem][physics]") {
-  const fs::path dir = freshDir("builtin-coupled");
+  const fs::path dir = support::freshDir("builtin-coupled");
   const study::Study study = smallCoupledStudy(dir / "out");
   const study::ToolMotionPlan plan = study::planToolMotion(study, study.tools[0]);
   REQUIRE(plan.insertion_steps == 95);  // (18 + 10.5) mm at 300 mm/s in whole 1 ms steps
   REQUIRE(plan.drag_steps == 100);
 
   auto backend = builtin::makeBackend(study);
-  HeightRecorder dem(*backend, study.tools[0].name);
+  support::MotionRecorder dem(*backend, study.tools[0].name);
   // Built at rest at the plan's start pose, on a clock at 0 (coupling_api.hpp).
   CHECK(dem.initial_time_s == 0);
   CHECK(dem.initial.origin_m[0] == Approx(0.045).margin(1e-15));
@@ -146,23 +99,7 @@ TEST_CASE("a coupled run on the builtin DEM moves the tool once: down from the p
   options.output_dir = dir / "out";
   const fem::CoupledRunSummary summary = fem::CoupledDriver(study, options).run(dem);
   CHECK(summary.complete);
-  REQUIRE(dem.heights_m.size() == static_cast<std::size_t>(1 + plan.totalSteps()));
-
-  // Never up; down to the study's depth (to round-off) at the end of the insertion and held there:
-  // it reaches the depth exactly once, after insertion_steps FEM steps.
-  const double depth_y = study.soil.fill_height_m - study.tools[0].motion.depth_m;
-  int arrivals = 0;
-  for (std::size_t k = 1; k < dem.heights_m.size(); ++k) {
-    INFO("after FEM step " << k);
-    CHECK(dem.heights_m[k] <= dem.heights_m[k - 1] + 1e-15);
-    const bool at_depth = std::abs(dem.heights_m[k] - depth_y) < 1e-12;
-    if (at_depth && std::abs(dem.heights_m[k - 1] - depth_y) >= 1e-12) {
-      ++arrivals;
-      CHECK(k == static_cast<std::size_t>(plan.insertion_steps));
-    }
-  }
-  CHECK(arrivals == 1);
-  CHECK(dem.heights_m.back() == Approx(depth_y).margin(1e-12));
+  support::checkMovesDownOnceToDepth(dem.heights_m, study, plan);
 
   // One clock: at every instant both wrote, the FEM's tool nodes are the DEM's (the DEM files are
   // written by the backend itself into output.directory/vtk), and both collections give the DEM time.

@@ -30,7 +30,7 @@ inline study::Study smallStudy() {
   soil.contact.tangential_history = true;
   soil.contact.characteristic_velocity_m_s = 0.5;
   soil.settle_kinetic_energy_J = 1e-6;
-  soil.deposition_backend = study::DepositionBackend::Liggghts;  // these tests exercise LIGGGHTS' own deposition
+  soil.deposition_backend = "liggghts";  // these tests exercise LIGGGHTS' own deposition
   study::Tool tool;
   tool.name = "tool";
   tool.dem_material = "tool_steel";

@@ -55,7 +55,7 @@ std::vector<std::array<double, 4>> expectedAfterClearance(const study::Study& st
 TEST_CASE("LIGGGHTS starts from the built-in backend's settled soil, bit for bit", "[liggghts][soil]") {
   const SoilDirectory soil_dir;
   auto study = liggghts::testing::smallStudy();
-  study.soil.deposition_backend = study::DepositionBackend::Builtin;
+  study.soil.deposition_backend = "builtin";
   builtin::DepositReport report;
   const auto file = adapter::settledSoilFile(study, soil_dir.dir);
   adapter::writeSettledSoil(file, builtin::depositSoil(study, 1, report, {}));
@@ -84,7 +84,7 @@ TEST_CASE("the built-in backend starts from LIGGGHTS' settled soil, bit for bit"
   REQUIRE(liggghts::soilOrigin(*liggghts::makeBackend(study, options)).deposited);
   const auto file = adapter::settledSoilFile(study, soil_dir.dir);
   const auto soil = adapter::readSettledSoil(file, study);
-  CHECK(soil.backend == study::DepositionBackend::Liggghts);
+  CHECK(soil.backend == "liggghts");
   CHECK(soil.settling.stages == 1);
   CHECK(soil.settling.surface_height_m == adapter::soilSurfaceHeight(soil.particles, study.soil.diameter_max_m));
 
@@ -112,7 +112,7 @@ TEST_CASE("the built-in backend starts from LIGGGHTS' settled soil, bit for bit"
 TEST_CASE("a backend without the soil file of another backend's deposition says which command makes it", "[liggghts][soil]") {
   const SoilDirectory soil_dir;
   auto study = liggghts::testing::smallStudy();
-  study.soil.deposition_backend = study::DepositionBackend::Builtin;
+  study.soil.deposition_backend = "builtin";
   liggghts::BackendOptions options;
   options.soil_directory = soil_dir.dir;
   try {

@@ -58,7 +58,7 @@ struct SettlingFigures {
 
 struct SettledSoil {
   std::string soil_hash;
-  study::DepositionBackend backend = study::DepositionBackend::Builtin;
+  std::string backend = "builtin";  // soil.deposition.backend: the backend that deposited it
   std::uint64_t seed = 0;        // soil.deposition.seed
   std::int32_t cores = 1;        // threads or MPI ranks of the deposition (the bits depend on it)
   SettlingFigures settling;

@@ -19,6 +19,12 @@ inline RigidMotion rigidMotionOf(const study::LinearMotion& phase, double plan_s
   return {phase.origin_m, phase.velocity_m_s, plan_start_s + phase.t0_s};
 }
 
+// The draught of a tool dragged along +z (bin frame): -sum of the z components of its node forces
+// (N), subtracted from `sum_N` node by node (so a sum over intervals adds in one order everywhere).
+inline void accumulateDraught(double& sum_N, const NodeArray& node_forces_N) {
+  for (std::size_t k = 2; k < node_forces_N.size(); k += 3) sum_N -= node_forces_N[k];
+}
+
 // Sets the plan's insertion, simulates it (insertion_steps FEM steps in one call) and sets its drag.
 void insertAndStartDrag(CouplingApi& dem, const study::Study& study, const study::Tool& tool);
 

@@ -99,10 +99,6 @@ struct Layer {
   bool operator==(const Layer&) const = default;
 };
 
-// Which DEM deposits the settled soil (soil.deposition.backend): every DEM backend starts from that
-// one settled soil (the backend-neutral file of adapter/settled_soil.hpp).
-enum class DepositionBackend { Builtin, Liggghts };
-
 struct Soil {
   double bin_length_m = 0.650;  // along z
   double bin_width_m = 0.250;   // along x
@@ -116,7 +112,10 @@ struct Soil {
   ContactModel contact;
   std::uint64_t deposition_seed = 1;
   double settle_kinetic_energy_J = 1e-6;   // deposition ends below this total kinetic energy
-  DepositionBackend deposition_backend = DepositionBackend::Builtin;
+  // The DEM backend that deposits the settled soil (soil.deposition.backend, a name of the backend
+  // registry, study/backend_capabilities.hpp): every DEM backend starts from that one settled soil
+  // (the backend-neutral file of adapter/settled_soil.hpp).
+  std::string deposition_backend = "builtin";
   bool operator==(const Soil&) const = default;
 };
 
@@ -307,11 +306,6 @@ std::string describe(const Study& study);
 // soil serves every backend and core count. 16 lowercase hex digits. Throws std::invalid_argument
 // for kinds without soil.
 std::string soilHash(const Study& study);
-
-// The file spelling of a deposition backend ("builtin", "liggghts") and back; the latter throws
-// std::invalid_argument naming the accepted words.
-const std::string& depositionBackendName(DepositionBackend backend);
-DepositionBackend parseDepositionBackend(const std::string& name);
 
 // True for the kinds that simulate soil (coupled, dem-only, cone-penetration).
 bool hasSoil(StudyKind kind);

@@ -1,18 +1,22 @@
-// Settled soils for the executables (`demfem deposit`, `demfem run`, `demfem-dem`): the one place
-// that knows which DEM deposits a study's soil and when a soil may be run on.
+// Settled soils for the executables (`demfem deposit`, `demfem run`, `demfem-dem`): which DEM
+// deposits a study's soil (the backend registry's entry, backend_registry.hpp) and when a soil may
+// be run on.
 //
 // Contract
 // - The soil of a study is the backend-neutral file adapter::settledSoilFile(study, dir)
 //   (adapter/settled_soil.hpp); it is deposited by the backend soil.deposition.backend names and
 //   read by every backend.
-// - depositWith() deposits with the given backend (built-in: `cores` threads; LIGGGHTS: in this
-//   process, one MPI rank) and returns the soil with its settling figures, not written. Unless
-//   `quiet`, it reports progress with time left and each stage's summary on standard error.
+// - depositWith() deposits with the backend named `backend` (its BackendEntry::deposit: the
+//   built-in DEM on `cores` threads, LIGGGHTS in this process on one MPI rank) and returns the soil
+//   with its settling figures, not written. Unless `quiet`, it reports progress with time left and
+//   each stage's summary on standard error. Throws InputError for a backend this build lacks or one
+//   that simulates no particles.
 // - An unsettled soil (a settling stage hit its time cap, or the final kinetic energy is not below
 //   soil.deposition.settle_kinetic_energy_J) is refused by requireSettled() unless allowed.
 #pragma once
 
 #include "demfem/adapter/settled_soil.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/study/study.hpp"
 
 #include <filesystem>
@@ -20,13 +24,7 @@
 
 namespace demfem::cli {
 
-struct DepositCost {
-  long steps = 0;          // DEM steps (built-in only; 0 for LIGGGHTS)
-  double time_step_s = 0;  // deposition step (built-in only)
-};
-
-adapter::SettledSoil depositWith(study::DepositionBackend backend, const study::Study& study, int cores,
-                                 DepositCost& cost, bool quiet);
+adapter::SettledSoil depositWith(const std::string& backend, const study::Study& study, int cores, DepositCost& cost, bool quiet);
 
 // Throws InputError naming `file` and the reason when the soil is not settled and !allow_unsettled.
 void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::path& file, bool allow_unsettled);

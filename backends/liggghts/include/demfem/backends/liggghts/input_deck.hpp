@@ -44,7 +44,7 @@ struct InputDeck {
   std::vector<std::string> tools;           // tool meshes, their wall and movers
   int atom_type_count = 0;
   double time_step_s = 0;               // demTimeStep() shortened to divide fem.dt_s (study/tool_motion.hpp)
-  double insertion_top_m = 0;           // top of the insertion stack (y)
+  double fall_time_s = 0;               // free fall from the top of the insertion stack to the floor
 };
 
 // The DEM step the deck uses: the study's explicit dem.dt_s, else dem.dt_fraction of the critical
