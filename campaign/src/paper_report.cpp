@@ -89,7 +89,7 @@ std::string caseTable(const std::vector<ReportCase>& cases) {
     md << "| " << c.name << " | " << c.study.tools.front().name << " | " << kindName(c.study.kind) << " | " << formatNumber("%.0f", m.depth_m * 1e3)
        << " | " << formatNumber("%.2f", m.velocity_m_s * 1e3) << " (" << (c.paper ? formatNumber("%.2f", c.paper->velocity_mm_s) : "-") << ") | ";
     if (!c.run) {
-      md << "not run | | | | | |\n";
+      md << "not finished | | | | | |\n";
       continue;
     }
     const Evaluated& e = *c.run;
@@ -114,7 +114,7 @@ std::string tiltTable(const std::vector<ReportCase>& cases) {
       md << range(o) << " (" << formatNumber("%.0f", c.run->tilt_begin_mm) << "-" << formatNumber("%.0f", c.run->tilt_end_mm) << " mm) | "
          << formatNumber("%+.2f", (o.first + o.second) / 2 - (p.first + p.second) / 2) << " |\n";
     } else {
-      md << "not run | |\n";
+      md << "not finished | |\n";
     }
   }
   return md.str();
@@ -126,7 +126,7 @@ std::string hoursTable(const std::vector<ReportCase>& cases) {
   for (const ReportCase& c : cases) {
     const double projected_s = c.run && c.run->run_estimate_s > 0 ? c.full_estimate_s * c.run->wall_s / c.run->run_estimate_s : c.full_estimate_s;
     md << "| " << c.name << " | " << (c.paper ? formatNumber("%.0f", c.paper->hours) : "-") << " | "
-       << (c.run ? formatNumber("%.0f s", c.run->wall_s) + " (" + formatNumber("%.0f", c.run->stroke_mm) + " mm stroke)" : std::string("not run")) << " | "
+       << (c.run ? formatNumber("%.0f s", c.run->wall_s) + " (" + formatNumber("%.0f", c.run->stroke_mm) + " mm stroke)" : std::string("not finished")) << " | "
        << formatNumber("%.1f", projected_s / 3600) << (c.run ? " (measured cost)" : " (estimate)") << " | "
        << (c.paper ? formatNumber("%.2f", projected_s / 3600 / c.paper->hours) : "-") << " |\n";
   }
