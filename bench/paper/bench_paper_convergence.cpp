@@ -101,14 +101,21 @@ int main(int argc, char** argv) {
     double window_begin_mm = 0, window_end_mm = 0;
     for (std::size_t i = 0; i < files.size(); ++i) {
       const campaign::CaseStatus& c = summary.cases[i];
-      if (c.state != campaign::CaseState::Done) throw std::runtime_error(c.name + ": " + campaign::caseStateName(c.state) + " " + c.message);
       const study::Study st = study::loadStudy(c.run_dir / "study.json");
+      const double dt_s = study::demStepDividing(physics::demTimeStep(st).step_s, st.fem.dt_s);
+      if (c.state != campaign::CaseState::Done) {  // a blow-up: this step is unstable
+        campaign::ConvergencePoint failed{variants[i].first, dt_s, variants[i].second};
+        failed.wall_s = c.wall_s;
+        failed.failure = c.message;
+        points.push_back(failed);
+        continue;
+      }
       const campaign::RunEvaluation e = campaign::evaluateCampaignRun(c.run_dir, st);
       window_begin_mm = e.window_begin_mm;
       window_end_mm = e.window_end_mm;
-      points.push_back({variants[i].first, study::demStepDividing(physics::demTimeStep(st).step_s, st.fem.dt_s), variants[i].second,
+      points.push_back({variants[i].first, dt_s, variants[i].second,
                         e.window.force_N.mean, e.window.force_N.std_dev, e.window.deformation_mm.mean, e.window.deformation_mm.std_dev,
-                        e.fit.b, e.fit.a, e.wall_s});
+                        e.fit.b, e.fit.a, e.wall_s, {}});
     }
     char caption[256];
     std::snprintf(caption, sizeof caption, "%s cut to a %.0f x %.0f mm bin, %.0f mm stroke (window %.0f-%.0f mm)", fs::path(study_file).stem().c_str(),

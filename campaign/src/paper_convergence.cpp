@@ -27,7 +27,7 @@ double sampleStd(const std::vector<double>& v) {
 
 const ConvergencePoint* seedOne(const std::vector<ConvergencePoint>& points, double fraction) {
   for (const ConvergencePoint& p : points)
-    if (p.dt_fraction == fraction && p.seed == 1) return &p;
+    if (p.dt_fraction == fraction && p.seed == 1 && p.failure.empty()) return &p;
   return nullptr;
 }
 
@@ -58,7 +58,8 @@ ConvergenceSummary summarize(std::vector<ConvergencePoint> points, std::string r
   });
   s.points = std::move(points);
   std::map<double, std::vector<const ConvergencePoint*>> by_fraction;
-  for (const ConvergencePoint& p : s.points) by_fraction[p.dt_fraction].push_back(&p);
+  for (const ConvergencePoint& p : s.points)
+    if (p.failure.empty()) by_fraction[p.dt_fraction].push_back(&p);
   if (by_fraction.empty()) return s;
   const auto most = std::max_element(by_fraction.begin(), by_fraction.end(),
                                      [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
@@ -84,7 +85,7 @@ ConvergenceSummary summarize(std::vector<ConvergencePoint> points, std::string r
                         std::fabs(p->fit_b - ref->fit_b) <= 2 * s.fit_b_scatter;
     if (within) s.within_scatter.push_back(fraction);
     all_finer_within = all_finer_within && within;
-    if (all_finer_within) s.converged_fraction = fraction;
+    if (all_finer_within && fraction != finest) s.converged_fraction = fraction;
   }
   return s;
 }
@@ -94,7 +95,8 @@ nlohmann::json toJson(const ConvergenceSummary& s) {
   for (const ConvergencePoint& p : s.points)
     points.push_back({{"dt_fraction", p.dt_fraction}, {"dt_s", p.dt_s}, {"seed", p.seed}, {"force_mean_N", p.force_mean_N},
                       {"force_std_N", p.force_std_N}, {"deformation_mean_mm", p.deformation_mean_mm},
-                      {"deformation_std_mm", p.deformation_std_mm}, {"fit_b", p.fit_b}, {"fit_a", p.fit_a}, {"wall_time_s", p.wall_s}});
+                      {"deformation_std_mm", p.deformation_std_mm}, {"fit_b", p.fit_b}, {"fit_a", p.fit_a}, {"wall_time_s", p.wall_s},
+                      {"failure", p.failure}});
   return {{"reduced_case", s.reduced_case},
           {"points", points},
           {"scatter_seeds", s.scatter_seeds},
@@ -111,7 +113,7 @@ ConvergenceSummary convergenceFromJson(const nlohmann::json& doc) {
     points.push_back({p.at("dt_fraction").get<double>(), p.at("dt_s").get<double>(), p.at("seed").get<std::uint64_t>(),
                       p.at("force_mean_N").get<double>(), p.at("force_std_N").get<double>(), p.at("deformation_mean_mm").get<double>(),
                       p.at("deformation_std_mm").get<double>(), p.at("fit_b").get<double>(), p.at("fit_a").get<double>(),
-                      p.at("wall_time_s").get<double>()});
+                      p.at("wall_time_s").get<double>(), p.at("failure").get<std::string>()});
   return summarize(std::move(points), doc.at("reduced_case").get<std::string>());
 }
 
@@ -120,17 +122,35 @@ std::string markdown(const ConvergenceSummary& s) {
   md << "Reduced case: " << s.reduced_case << ". Window statistics and the FFT power-law fit of the deformation as in the case "
         "table below.\n\n| dt fraction | dt_DEM s | seed | force N (mean ± sd) | deformation mm (mean ± sd) | fit b | fit a | wall s |\n"
         "|---|---|---|---|---|---|---|---|\n";
-  for (const ConvergencePoint& p : s.points)
+  for (const ConvergencePoint& p : s.points) {
+    if (!p.failure.empty()) {
+      md << "| " << formatNumber("%g", p.dt_fraction) << " | " << formatNumber("%.3g", p.dt_s) << " | " << p.seed << " | not finished: "
+         << p.failure.substr(0, p.failure.find(": particle")) << " | | | | " << formatNumber("%.0f", p.wall_s) << " |\n";
+      continue;
+    }
     md << "| " << formatNumber("%g", p.dt_fraction) << " | " << formatNumber("%.3g", p.dt_s) << " | " << p.seed << " | " << formatNumber("%.4g", p.force_mean_N)
        << " ± " << formatNumber("%.2g", p.force_std_N) << " | " << formatNumber("%.4g", p.deformation_mean_mm) << " ± " << formatNumber("%.2g", p.deformation_std_mm)
        << " | " << formatNumber("%.3f", p.fit_b) << " | " << formatNumber("%.3g", p.fit_a) << " | " << formatNumber("%.0f", p.wall_s) << " |\n";
+  }
   md << "\nSeed scatter (" << s.scatter_seeds << " deposition seeds): force " << formatNumber("%.3g", s.force_scatter_N) << " N, deformation "
      << formatNumber("%.3g", s.deformation_scatter_mm) << " mm, fit b " << formatNumber("%.3f", s.fit_b_scatter) << ". ";
   if (s.converged_fraction)
     md << "Every fraction up to " << formatNumber("%g", *s.converged_fraction)
-       << " gives the finest step's numbers within two seed scatters: that is the converged fraction.\n";
+       << " gives the finest step's numbers within two seed scatters: that is the converged fraction.";
   else
-    md << "No fraction is shown converged (fewer than two seeds, or the coarsest differ by more than two scatters).\n";
+    md << "No coarser fraction gives the finest step's numbers within two seed scatters: the step is not shown converged at "
+          "these fractions.";
+  // The change of the seed-1 force and deformation means at each halving (fractions descending).
+  const ConvergencePoint* previous = nullptr;
+  for (const ConvergencePoint& p : s.points) {
+    if (p.seed != 1 || !p.failure.empty()) continue;
+    if (previous)
+      md << " From " << formatNumber("%g", previous->dt_fraction) << " to " << formatNumber("%g", p.dt_fraction) << ": force "
+         << formatNumber("%+.1f", 100 * (p.force_mean_N / previous->force_mean_N - 1)) << " %, deformation "
+         << formatNumber("%+.1f", 100 * (p.deformation_mean_mm / previous->deformation_mean_mm - 1)) << " %.";
+    previous = &p;
+  }
+  md << '\n';
   return md.str();
 }
 

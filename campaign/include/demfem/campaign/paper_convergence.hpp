@@ -8,11 +8,11 @@
 //   length x width (fill height, layers, particles and contact data kept), the stroke cut, the
 //   DEM step at `fraction` of the stiffest spring (dem.criterion stiffest-spring) and the
 //   deposition seed set; the name says all three. Throws study::StudyError if that is invalid.
-// - summarize(points): the seed scatter is the sample standard deviation, over the points of the
+// - summarize(points): points with a failure are listed but enter nothing else. The seed scatter is the sample standard deviation, over the points of the
 //   most-seeded fraction, of force mean, deformation mean and fit exponent b (0 with one seed). A
 //   fraction is within the scatter when each of its seed-1 numbers differs from the finest
 //   fraction's seed-1 number by at most 2 scatters; `converged_fraction` is the largest fraction
-//   that is, and every finer one too (none without a scatter).
+//   coarser than the finest that is, and every finer one too (none without a scatter).
 // - markdown(): the table and the verdict, for the bench's output and the report.
 #pragma once
 
@@ -31,6 +31,7 @@ struct ConvergencePoint {
   double force_mean_N = 0, force_std_N = 0, deformation_mean_mm = 0, deformation_std_mm = 0;
   double fit_b = 0, fit_a = 0;
   double wall_s = 0;
+  std::string failure;  // empty: the run finished; else why not (a blow-up: the step is unstable)
 };
 
 struct ConvergenceSummary {
