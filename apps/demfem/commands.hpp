@@ -11,4 +11,5 @@ void addEvaluateCommand(CLI::App& app);  // evaluate.cpp
 void addCompareCommand(CLI::App& app);   // compare.cpp
 void addCalibrateCommand(CLI::App& app); // calibrate.cpp
 void addDiagnoseCommand(CLI::App& app);  // diagnose.cpp
+void addCampaignCommand(CLI::App& app);  // campaign.cpp
 }  // namespace demfem::cli

@@ -15,5 +15,6 @@ int main(int argc, char** argv) {
   demfem::cli::addCompareCommand(app);
   demfem::cli::addCalibrateCommand(app);
   demfem::cli::addDiagnoseCommand(app);
+  demfem::cli::addCampaignCommand(app);
   return demfem::cli::runApp(app, argc, argv);
 }

@@ -1,7 +1,7 @@
 #include "run_cost.hpp"
 
-#include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/backend_registry.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/study/tool_motion.hpp"
@@ -22,21 +22,6 @@ constexpr double kReferenceFemStepS = 0.023;
 
 std::int64_t wholeSteps(double time_s, double dt_s) { return std::max<std::int64_t>(1, std::llround(std::ceil(time_s / dt_s - 1e-9))); }
 
-// The built-in backend's DEM step on the bin walls and one smallest particle of each layer material.
-double demStep(const study::Study& s) {
-  builtin::DemSimulation sim(s.soil, builtin::binDomain(s.soil), 1);
-  builtin::addBinWalls(sim, s.soil);
-  for (std::size_t l = 0; l < s.soil.layers.size(); ++l) {
-    builtin::ParticleState p;
-    p.radius = s.soil.diameter_min_m / 2;
-    p.x = {s.soil.bin_width_m / 2, s.soil.fill_height_m / 2, s.soil.bin_length_m * (static_cast<double>(l) + 0.5) / static_cast<double>(s.soil.layers.size())};
-    p.material = sim.materials().index(s.soil.layers[l].material);
-    p.layer = static_cast<int>(l);
-    sim.addParticle(p);
-  }
-  return builtin::studyTimeStep(sim, s.dem);
-}
-
 }  // namespace
 
 RunCost estimateRunCost(const study::Study& s) {
@@ -55,7 +40,10 @@ RunCost estimateRunCost(const study::Study& s) {
     if (tool.fem.deformable && s.kind != study::StudyKind::DemOnly)
       cost.keypoints = std::max(cost.keypoints, static_cast<int>(fem::buildFullModel(tool).keypoint_nodes.size()));
   if (has_soil) {
-    cost.dem_step_s = study::demStepDividing(demStep(s), s.fem.dt_s);  // the step both backends run (one clock)
+    const physics::DemStep step = physics::demTimeStep(s);
+    cost.dem_step_s = study::demStepDividing(step.step_s, s.fem.dt_s);  // the step both backends run (one clock)
+    cost.dem_critical_step_s = step.critical_s;
+    cost.dem_step_why = step.why;
     cost.dem_steps = wholeSteps(cost.simulated_s, *cost.dem_step_s);
     cost.particles = builtin::estimatedParticleCount(s.soil);
     if (backend.speed)

@@ -6,9 +6,9 @@
 // - FEM steps: the tool motion plan's (study/tool_motion.hpp: insertion and drag in whole FEM
 //   steps; the longest of the tools); a weight drop: duration / dt. DEM steps: the same simulated
 //   time at the DEM step.
-// - DEM step: the study's (dem.dt_s, or dem.dt_fraction of its criterion's critical step on the
-//   study's materials, bin walls and smallest particle, as the built-in backend computes it),
-//   shortened to divide the FEM step (study::demStepDividing).
+// - DEM step: physics::demTimeStep (backends/physics/time_step.hpp, the one both backends run):
+//   dem.dt_s, or dem.dt_fraction of its criterion's critical step, shortened to divide the FEM step
+//   (study::demStepDividing); with the critical step and why it is what it is.
 // - Particles: builtin::estimatedParticleCount (bin volume below the fill, packing, sizes).
 // - Wall time: DEM particle-steps at the measured speed of the study's backend (the backend
 //   registry's DemSpeed, backend_registry.hpp: threads and particle-steps per second; none for a
@@ -22,11 +22,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 
 namespace demfem::cli {
 
 struct RunCost {
   std::optional<double> dem_step_s;  // absent without soil (weight drop)
+  double dem_critical_step_s = 0;    // physics::DemStep::critical_s
+  std::string dem_step_why;          // physics::DemStep::why
   std::int64_t fem_steps = 0;
   std::int64_t dem_steps = 0;
   double simulated_s = 0;

@@ -22,7 +22,9 @@ std::string describeCost(const RunCost& c) {
   char text[512];
   std::string out = "# cost (estimated from the measured speeds in docs/builtin-dem.md and docs/fem.md)\n";
   if (c.dem_step_s) {
-    std::snprintf(text, sizeof text, "dem_step = %.4g s\ndem_steps = %lld\nparticles = %zu (at most: the packing the deposition inserts)\n", *c.dem_step_s,
+    std::snprintf(text, sizeof text, "dem_step = %.4g s (critical step %.4g s: ", *c.dem_step_s, c.dem_critical_step_s);
+    out += text + c.dem_step_why + ")\n";
+    std::snprintf(text, sizeof text, "dem_steps = %lld\nparticles = %zu (at most: the packing the deposition inserts)\n",
                   static_cast<long long>(c.dem_steps), c.particles);
     out += text;
   }
@@ -33,6 +35,8 @@ std::string describeCost(const RunCost& c) {
 
 nlohmann::json costJson(const RunCost& c) {
   return {{"dem_step_s", c.dem_step_s ? nlohmann::json(*c.dem_step_s) : nlohmann::json(nullptr)},
+          {"dem_critical_step_s", c.dem_step_s ? nlohmann::json(c.dem_critical_step_s) : nlohmann::json(nullptr)},
+          {"dem_step_reason", c.dem_step_s ? nlohmann::json(c.dem_step_why) : nlohmann::json(nullptr)},
           {"dem_steps", c.dem_steps},
           {"fem_steps", c.fem_steps},
           {"simulated_s", c.simulated_s},

@@ -20,6 +20,7 @@
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
 
@@ -115,11 +116,11 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   CLI::App app{"builtin_bench: particle-steps per second of the built-in DEM on a settled bin with a moving tool"};
-  std::string study_file = "studies/s235_dem_18.json";
+  std::string study_file = "studies/paper/s235_dem_18.json";
   std::string soil_dir;
   long steps = 2000;
   std::vector<int> thread_counts{1, 2};
-  app.add_option("--study", study_file, "Study with the bin, soil and tool (default studies/s235_dem_18.json)")
+  app.add_option("--study", study_file, "Study with the bin, soil and tool (default studies/paper/s235_dem_18.json)")
       ->check(CLI::ExistingFile);
   app.add_option("--soil-dir", soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
   app.add_option("--steps", steps, "Timed drag steps per case")->check(CLI::PositiveNumber);
@@ -206,7 +207,7 @@ int main(int argc, char** argv) {
         const int m = sim.addMesh(plateMesh(tool, sim.materials().index(tool.dem_material)));
         sim.setMeshMotion(m, {st.soil.bin_width_m / 2, st.soil.fill_height_m + 0.005, tool.motion.start_z_m - tool.geometry.thickness_m / 2},
                           {0, -kInsertionVelocity_m_s, 0}, sim.time());
-        sim.setTimeStep(studyTimeStep(sim, st.dem));
+        sim.setTimeStep(physics::demTimeStep(st).step_s);
         sim.run(std::lround(travel / kInsertionVelocity_m_s / sim.timeStep()));
         for (std::size_t i = 0; i < sim.particleCount(); ++i) states.push_back(sim.particle(i));
         origin = sim.mesh(m).offset(sim.time());
@@ -219,7 +220,7 @@ int main(int argc, char** argv) {
       for (int round = 0; round < rounds; ++round)
         for (const auto& [threads, with_competitor] : variants) {
           DemSimulation sim = makeBin(st, states, threads, origin);
-          sim.setTimeStep(studyTimeStep(sim, st.dem));
+          sim.setTimeStep(physics::demTimeStep(st).step_s);
           sim.run(10);  // lists and first forces outside the timing
           std::unique_ptr<Competitor> competitor;
           if (with_competitor) competitor = std::make_unique<Competitor>();

@@ -11,7 +11,7 @@ set(allowed_backends/builtin "backends/builtin;backends/physics;adapter;study")
 set(allowed_backends/liggghts "backends/liggghts;backends/physics;adapter;study")
 set(allowed_analysis "analysis")
 # campaign reruns the model: above fem, the backends and analysis (analysis stays simulation-free).
-set(allowed_campaign "campaign;analysis;fem;backends/builtin;adapter;study")
+set(allowed_campaign "campaign;analysis;fem;backends/builtin;backends/physics;adapter;study")
 
 set(violations "")
 foreach(layer study protocol adapter fem backends/physics backends/builtin backends/liggghts analysis campaign)

@@ -25,7 +25,7 @@ const std::filesystem::path kStudies = std::filesystem::path(DEMFEM_SOURCE_DIR) 
 
 std::vector<std::filesystem::path> shippedStudies() {
   std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(kStudies))
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(kStudies))
     if (entry.path().extension() == ".json") files.push_back(entry.path());
   std::sort(files.begin(), files.end());
   return files;
@@ -64,11 +64,11 @@ TEST_CASE("the soil-bin studies carry Table 1's depths and velocities", "[study]
   };
   // Table 1: S235 31.19/30.03/32.22 mm/s, PMMA 36.14/28.76/34.09 mm/s at 18/30/42 mm.
   const std::vector<Case> cases{
-      {"s235_dem_18.json", 0.018, 0.03119},     {"s235_dem_30.json", 0.030, 0.03003},
-      {"s235_dem_42.json", 0.042, 0.03222},     {"s235_coupled_18.json", 0.018, 0.03119},
-      {"s235_coupled_30.json", 0.030, 0.03003}, {"s235_coupled_42.json", 0.042, 0.03222},
-      {"pmma_coupled_18.json", 0.018, 0.03614}, {"pmma_coupled_30.json", 0.030, 0.02876},
-      {"pmma_coupled_42.json", 0.042, 0.03409},
+      {"paper/s235_dem_18.json", 0.018, 0.03119},     {"paper/s235_dem_30.json", 0.030, 0.03003},
+      {"paper/s235_dem_42.json", 0.042, 0.03222},     {"paper/s235_coupled_18.json", 0.018, 0.03119},
+      {"paper/s235_coupled_30.json", 0.030, 0.03003}, {"paper/s235_coupled_42.json", 0.042, 0.03222},
+      {"paper/pmma_coupled_18.json", 0.018, 0.03614}, {"paper/pmma_coupled_30.json", 0.030, 0.02876},
+      {"paper/pmma_coupled_42.json", 0.042, 0.03409},
   };
   for (const Case& c : cases) {
     INFO(c.file);
@@ -82,16 +82,20 @@ TEST_CASE("the soil-bin studies carry Table 1's depths and velocities", "[study]
     CHECK(s.tools[0].constraints.clamp_length_m == 0.040);
     CHECK(s.tools[0].constraints.load_cell_from_top_m == 0.065);
     CHECK(s.tools[0].constraints.sensor_from_top_m == 0.093);
-    CHECK(s.dem.dt_s == 7.93e-7);  // Section 2.10.2
+    // A tenth of the stiffest spring's contact time (docs/paper-reproduction.md); the paper's
+    // 7.93e-7 s (Section 2.10.2) is the explicit dem.dt_s the notes name.
+    CHECK_FALSE(s.dem.dt_s);
+    CHECK(s.dem.criterion == demfem::study::TimeStepCriterion::StiffestSpring);
+    CHECK(s.dem.dt_fraction == 0.1);
     CHECK(s.fem.dt_s == 0.001);    // Table 3
   }
-  CHECK(load("s235_dem_18.json").kind == StudyKind::DemOnly);
-  CHECK_FALSE(load("s235_dem_18.json").tools[0].fem.deformable);
-  CHECK(load("s235_coupled_18.json").tools[0].fem.deformable);
+  CHECK(load("paper/s235_dem_18.json").kind == StudyKind::DemOnly);
+  CHECK_FALSE(load("paper/s235_dem_18.json").tools[0].fem.deformable);
+  CHECK(load("paper/s235_coupled_18.json").tools[0].fem.deformable);
 }
 
 TEST_CASE("the paper's soil: Section 2.9 bin and layers, Table 2 particles, Table 4 friction", "[study]") {
-  const Study s = load("pmma_coupled_42.json");
+  const Study s = load("paper/pmma_coupled_42.json");
   CHECK(s.soil.bin_length_m == 0.650);
   CHECK(s.soil.bin_width_m == 0.250);
   CHECK(s.soil.fill_height_m == 0.085);
@@ -118,7 +122,7 @@ TEST_CASE("the paper's soil: Section 2.9 bin and layers, Table 2 particles, Tabl
 }
 
 TEST_CASE("the tools: Table 3 FEM data and Section 2.2 sizes", "[study]") {
-  const Study pmma = load("pmma_coupled_18.json");
+  const Study pmma = load("paper/pmma_coupled_18.json");
   const auto& p = pmma.tools[0];
   CHECK(p.geometry.length_m == 0.200);
   CHECK(p.geometry.width_m == 0.040);
@@ -129,7 +133,7 @@ TEST_CASE("the tools: Table 3 FEM data and Section 2.2 sizes", "[study]") {
   CHECK(p.fem.alpha_s == 0.00055);  // Table 3's 0.55 read as 0.55 ms (docs/architecture.md section 4)
   CHECK(p.fem.beta_per_s == 0);
   CHECK(pmma.material(p.dem_material).youngs_Pa == 7.9e10);  // Table 2, as printed
-  const Study steel = load("s235_coupled_30.json");
+  const Study steel = load("paper/s235_coupled_30.json");
   const auto& t = steel.tools[0];
   CHECK(t.geometry.thickness_m == 0.003);
   CHECK(t.fem.youngs_Pa == 2.07e11);
@@ -159,14 +163,15 @@ TEST_CASE("the soil hash is stable and depends on the soil only", "[study]") {
   CHECK(demfem::study::fnv1a64("a") == 0xaf63dc4c8601ec8cull);
   CHECK(demfem::study::fnv1a64("foobar") == 0x85944171f73967e8ull);
 
-  const std::string reference = soilHash(load("pmma_coupled_18.json"));
+  const std::string reference = soilHash(load("paper/pmma_coupled_18.json"));
   CHECK(reference.size() == 16);
   // Same soil, other tools, depths, kinds and tool materials: one deposit serves them all.
-  for (const char* other : {"pmma_coupled_42.json", "s235_coupled_30.json", "s235_dem_18.json", "cpt.json"}) {
+  // (cpt.json steps at the paper's explicit 7.93e-7 s, and the DEM step is part of the soil's hash.)
+  for (const char* other : {"paper/pmma_coupled_42.json", "paper/s235_coupled_30.json", "paper/s235_dem_18.json"}) {
     INFO(other);
     CHECK(soilHash(load(other)) == reference);
   }
-  nlohmann::json doc = readJson(kStudies / "pmma_coupled_18.json");
+  nlohmann::json doc = readJson(kStudies / "paper/pmma_coupled_18.json");
   const auto hashOf = [](const nlohmann::json& d) { return soilHash(parseStudy(d.dump(), "h.json")); };
   // Not sensitive to tools, notes, key order or the order of the interaction table.
   nlohmann::json tool_change = doc;

@@ -329,7 +329,7 @@ TEST_CASE("describe lists effective values in the file's units", "[study]") {
 }
 
 TEST_CASE("material and interaction look-ups are symmetric and reject unknown names", "[study]") {
-  const Study s = parseStudy(paper("pmma_coupled_30.json").dump(), "pmma_coupled_30.json");
+  const Study s = parseStudy(paper("paper/pmma_coupled_30.json").dump(), "pmma_coupled_30.json");
   CHECK(s.interaction("layer4", "layer3").static_friction == 0.21);  // Table 4
   CHECK(&s.interaction("layer3", "layer4") == &s.interaction("layer4", "layer3"));
   CHECK(s.material("layer1").yield_Pa == 5.88e5);
@@ -493,7 +493,7 @@ TEST_CASE("the model extensions a diagnosis adds are study keys with ranges, abs
   doc["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = 25.0;
   doc["tools"][0]["sensors"]["force_gain"] = -1;
   requireSingleIssue(doc, "/tools/0/sensors/force_gain", "must be > 0 and <= 100, got -1");
-  json rigid = paper("s235_dem_18.json");
+  json rigid = paper("paper/s235_dem_18.json");
   rigid["tools"][0]["sensors"] = {{"force_gain", 0.95}};
   requireSingleIssue(rigid, "/tools/0/sensors", "does not apply");
 }

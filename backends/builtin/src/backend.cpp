@@ -5,6 +5,7 @@
 #include "demfem/adapter/plate_surface.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/study/tool_motion.hpp"
 
 #include <cmath>
@@ -36,7 +37,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
       sim_.setMeshMotion(m, study::planToolMotion(study, tool).start_m, {0, 0, 0}, 0);
     }
     // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
-    sim_.setTimeStep(study::demStepDividing(studyTimeStep(sim_, study.dem), study.fem.dt_s));
+    sim_.setTimeStep(study::demStepDividing(physics::demTimeStep(study).step_s, study.fem.dt_s));
     if (study.output.vtk_every > 0) {
       vtk_interval_ = study.output.vtk_every * study.fem.dt_s;
       next_vtk_ = sim_.time();

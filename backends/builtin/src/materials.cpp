@@ -41,8 +41,7 @@ MaterialTable MaterialTable::fromSoil(const study::Soil& soil) {
       law.rolling_friction = found->rolling_friction;
       law.cohesion_J_m3 = found->cohesion_J_m3;
       // yield_Pa = 0 means "not limiting" (walls): K1 uses the other material's yield strength.
-      law.yield_min_Pa = ma.yield_Pa > 0 && mb.yield_Pa > 0 ? std::min(ma.yield_Pa, mb.yield_Pa)
-                                                             : std::max(ma.yield_Pa, mb.yield_Pa);
+      law.yield_min_Pa = physics::edemYieldMin(ma.yield_Pa, mb.yield_Pa);
       law.youngs_eff_Pa = physics::effectiveYoungs(ma.youngs_Pa, ma.poisson, mb.youngs_Pa, mb.poisson);
       law.log_restitution = std::log(std::min(found->restitution, 1.0 - 1e-12));
     }
@@ -70,21 +69,6 @@ void DemSimulation::useMaterial(int material, bool particle) {
 
 ContactStiffness DemSimulation::wallStiffness(int i, int wall_material) const {
   return contactStiffness(model_, table_.law(material_[i], wall_material), radius_[i], mass_[i]);
-}
-
-double DemSimulation::criticalTimeStep(study::TimeStepCriterion criterion) const {
-  if (particleCount() == 0) throw std::logic_error("builtin DEM: no particles to derive a time step from");
-  const double rmin = *std::min_element(radius_.begin(), radius_.end());
-  if (criterion == study::TimeStepCriterion::Rayleigh) {
-    // Rayleigh step at the smallest particle (docs/architecture.md section 11).
-    double dt = std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < particleCount(); ++i) {
-      const auto& m = table_.materials[material_[i]];
-      dt = std::min(dt, physics::rayleighTimeStep(rmin, m.density_kg_m3, m.youngs_Pa, m.poisson));
-    }
-    return dt;
-  }
-  return std::numbers::pi / 2.0 * stabilityLimit();  // pi sqrt(m*/k_max): contact half period of the stiffest spring
 }
 
 double DemSimulation::stabilityLimit() const {

@@ -1,6 +1,8 @@
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 
+#include "demfem/backends/physics/time_step.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -42,13 +44,6 @@ void addBinWalls(DemSimulation& sim, const study::Soil& soil) {
   sim.addPlane({{w, 0, 0}, {-1, 0, 0}, mat});
   sim.addPlane({{0, 0, 0}, {0, 0, 1}, mat});
   sim.addPlane({{0, 0, l}, {0, 0, -1}, mat});
-}
-
-double studyTimeStep(const DemSimulation& sim, const study::DemSettings& dem) {
-  if (dem.dt_s) return *dem.dt_s;
-  if (!(dem.dt_fraction > 0 && dem.dt_fraction <= 1))
-    throw std::invalid_argument("builtin DEM: /dem/dt_fraction must be in (0, 1], got " + std::to_string(dem.dt_fraction));
-  return dem.dt_fraction * sim.criticalTimeStep(dem.criterion);
 }
 
 int layerAt(const study::Soil& soil, double y) {
@@ -140,8 +135,8 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
       // or at kDepositionStepFraction of the stiffest spring's critical step, whichever is larger:
       // the paper's Rayleigh step (7.93e-7 s) is about 70 times below what the hysteretic spring
       // needs and would make the full bin take hours to settle.
-      sim.setTimeStep(std::max(studyTimeStep(sim, study.dem),
-                               kDepositionStepFraction * sim.criticalTimeStep(study::TimeStepCriterion::StiffestSpring)));
+      sim.setTimeStep(std::max(physics::demTimeStep(study).step_s,
+                               kDepositionStepFraction * physics::criticalStep(study, study::TimeStepCriterion::StiffestSpring).step_s));
       dt_set = true;
     }
     // The highest particle of the batch falls from its lattice level onto the pack.

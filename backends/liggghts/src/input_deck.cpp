@@ -2,6 +2,7 @@
 
 #include "demfem/adapter/coupling_api.hpp"
 #include "demfem/backends/physics/dem_formulas.hpp"
+#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/study/tool_motion.hpp"
 
 #include <algorithm>
@@ -200,10 +201,6 @@ void validateForLiggghts(const study::Study& study, const std::vector<std::strin
   }
 }
 
-double sphereMass(const study::Study& study, const std::string& material, double radius) {
-  return study.material(material).density_kg_m3 * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
-}
-
 }  // namespace
 
 int atomType(const study::Study& study, const std::string& material) {
@@ -211,35 +208,6 @@ int atomType(const study::Study& study, const std::string& material) {
   if (std::find(materials.begin(), materials.end(), material) == materials.end())
     throw CouplingError(ErrorCode::BadRequest, "material \"" + material + "\" is not used by the study's layers, bin or tools");
   return typeOf(materials, material);
-}
-
-double demTimeStep(const study::Study& study) {
-  if (study.dem.dt_s) {
-    requirePositive(*study.dem.dt_s, "dem.dt_s");
-    return *study.dem.dt_s;
-  }
-  requirePositive(study.dem.dt_fraction, "dem.dt_fraction");
-  const double r_min = study.soil.diameter_min_m / 2;
-  double critical = std::numeric_limits<double>::infinity();
-  for (const auto& layer : study.soil.layers) {
-    const auto& m = study.material(layer.material);
-    if (study.dem.criterion == study::TimeStepCriterion::Rayleigh) {
-      critical = std::min(critical, physics::rayleighTimeStep(r_min, m.density_kg_m3, m.youngs_Pa, m.poisson));
-    } else {
-      // Stiffest spring: the smallest sphere against the stiffest partner (a wall: R* = R, m* = m).
-      const double mass = sphereMass(study, layer.material, r_min);
-      double stiffest = 0;
-      for (const auto& other : typeMaterials(study)) {
-        const auto& o = study.material(other);
-        stiffest = std::max(stiffest, physics::hookeNormalStiffness(physics::effectiveYoungs(m.youngs_Pa, m.poisson, o.youngs_Pa, o.poisson),
-                                                                    r_min, mass, study.soil.contact.characteristic_velocity_m_s));
-      }
-      if (study.soil.contact.normal == study::NormalModel::HookeHysteresis)
-        stiffest *= study.soil.contact.coefficient_max_elastic_stiffness;
-      critical = std::min(critical, std::numbers::pi * std::sqrt(mass / stiffest));
-    }
-  }
-  return study.dem.dt_fraction * critical;
 }
 
 adapter::PlateSurface toolSurface(const study::Study& study, std::size_t tool_index) {
@@ -286,7 +254,7 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
 
   InputDeck deck;
   deck.atom_type_count = static_cast<int>(n_types);
-  deck.time_step_s = study::demStepDividing(demTimeStep(study), study.fem.dt_s);  // one clock with the FEM
+  deck.time_step_s = study::demStepDividing(physics::demTimeStep(study).step_s, study.fem.dt_s);  // one clock with the FEM
 
   const double w = soil.bin_width_m;
   const double r_max = soil.diameter_max_m / 2;

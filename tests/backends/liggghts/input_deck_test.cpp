@@ -3,6 +3,7 @@
 #include "small_study.hpp"
 
 #include "demfem/adapter/coupling_api.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -101,21 +102,22 @@ TEST_CASE("EDEM-only contact laws and values LIGGGHTS would abort on are refused
   CHECK(errorCodeOf(s) == adapter::ErrorCode::Unsupported);
 }
 
-TEST_CASE("the DEM step follows the study's criterion", "[liggghts]") {
+TEST_CASE("the deck steps at the shared DEM step of the study's criterion, divided to the FEM step", "[liggghts]") {
   auto s = smallStudy();
+  const auto deckStep = [](const study::Study& st) { return liggghts::translateStudy(st, "stl").time_step_s; };
   s.dem.criterion = study::TimeStepCriterion::Rayleigh;
   // Rayleigh: pi R sqrt(rho/G) / (0.1631 nu + 0.8766) at R = 4.75 mm, G = E / 2.6 (docs/architecture.md section 11)
   const double rayleigh = std::numbers::pi * 0.00475 * std::sqrt(2600 / (5e6 / 2.6)) / (0.1631 * 0.3 + 0.8766);
-  CHECK(liggghts::demTimeStep(s) == Approx(0.2 * rayleigh).epsilon(1e-12));
+  CHECK(deckStep(s) == Approx(study::demStepDividing(0.2 * rayleigh, s.fem.dt_s)).epsilon(1e-12));
   s.dem.criterion = study::TimeStepCriterion::StiffestSpring;
   // LIGGGHTS hooke against the steel wall: Y* = 1 / ((1 - 0.09)/5e6 + (1 - 0.09)/2e8), R* = R, m* = m, V = 0.5
   const double y_eff = 1 / (0.91 / 5e6 + 0.91 / 2e8);
   const double mass = 2600 * 4.0 / 3.0 * std::numbers::pi * std::pow(0.00475, 3);
   const double kn = 16.0 / 15.0 * std::sqrt(0.00475) * y_eff *
                     std::pow(15.0 * mass * 0.25 / (16.0 * std::sqrt(0.00475) * y_eff), 0.2);
-  CHECK(liggghts::demTimeStep(s) == Approx(0.2 * std::numbers::pi * std::sqrt(mass / kn)).epsilon(1e-12));
+  CHECK(deckStep(s) == Approx(study::demStepDividing(0.2 * std::numbers::pi * std::sqrt(mass / kn), s.fem.dt_s)).epsilon(1e-12));
   s.dem.dt_s = 2.5e-6;
-  CHECK(liggghts::demTimeStep(s) == 2.5e-6);
+  CHECK(deckStep(s) == Approx(2.5e-6).epsilon(1e-12));
 }
 
 TEST_CASE("the tool STL holds the keypoint triangles at the start position, outward normals", "[liggghts]") {

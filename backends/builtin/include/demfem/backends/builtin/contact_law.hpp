@@ -81,7 +81,7 @@ inline ContactStiffness contactStiffness(const study::ContactModel& model, const
   ContactStiffness s;
   switch (model.normal) {  // no default: a new normal law must say its stiffness here
     case study::NormalModel::EdemHysteretic:
-      s.kn = 5.0 * reff * law.yield_min_Pa;
+      s.kn = physics::edemLoadingStiffness(reff, law.yield_min_Pa);
       s.kt = model.stiffness_factor * s.kn;
       s.gamma_n = 2.0 * model.damping_factor * std::sqrt(meff * s.kn);  // on the K1 branch
       s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
@@ -99,11 +99,12 @@ inline ContactStiffness contactStiffness(const study::ContactModel& model, const
   return s;
 }
 
-// Largest spring stiffness a contact with this stiffness can reach (for the time-step criterion).
+// Largest spring stiffness a contact with this stiffness can reach (the stability check of
+// DemSimulation::setTimeStep; the study's step itself comes from physics/time_step.hpp).
 inline double stiffestSpring(const study::ContactModel& model, const PairLaw& law, const ContactStiffness& s) {
   switch (model.normal) {
-    case study::NormalModel::EdemHysteretic: return s.kn / (law.restitution * law.restitution);
-    case study::NormalModel::HookeHysteresis: return s.kn * std::max(1.0, model.coefficient_max_elastic_stiffness);
+    case study::NormalModel::EdemHysteretic: return physics::edemUnloadingStiffness(s.kn, law.restitution);
+    case study::NormalModel::HookeHysteresis: return physics::hookeHysteresisPeakStiffness(s.kn, model.coefficient_max_elastic_stiffness);
     case study::NormalModel::Hooke: break;
   }
   return s.kn;

@@ -106,11 +106,9 @@ class DemSimulation {
   // Sets the step; throws std::invalid_argument if dt <= 0 or above the stability limit.
   void setTimeStep(double dt);
   double timeStep() const { return dt_; }
-  // Critical step of a criterion (before the study's fraction is applied): Rayleigh
-  // pi R sqrt(rho/G) / (0.1631 nu + 0.8766) over particle materials at the smallest radius, or the
-  // stiffest spring's contact half period pi sqrt(m*/k_max) over all material pairs and walls.
-  double criticalTimeStep(study::TimeStepCriterion criterion) const;
-  double stabilityLimit() const;  // 2 sqrt(m*/k_max)
+  // 2 sqrt(m*/k_max) over the particles and walls in it: the largest step setTimeStep accepts (the
+  // study's step is chosen by physics::demTimeStep, backends/physics/time_step.hpp).
+  double stabilityLimit() const;
   static constexpr double overlapLimitFraction() { return 0.25; }
 
   // --- meshes ---

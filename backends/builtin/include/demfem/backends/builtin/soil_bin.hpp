@@ -37,8 +37,6 @@ struct DepositReport {
 Domain binDomain(const study::Soil& soil);
 // Adds the floor and the four side walls of the bin as planes.
 void addBinWalls(DemSimulation& sim, const study::Soil& soil);
-// The study's time step for `sim` (explicit dt_s, or the criterion times dt_fraction), validated.
-double studyTimeStep(const DemSimulation& sim, const study::DemSettings& dem);
 // Layer index (into soil.layers) of a particle centre at height y; the deepest layer below the fill.
 int layerAt(const study::Soil& soil, double y);
 

@@ -43,16 +43,9 @@ struct InputDeck {
   std::vector<std::string> tool_clearance;  // after settling: remove particles in the tools' way
   std::vector<std::string> tools;           // tool meshes, their wall and movers
   int atom_type_count = 0;
-  double time_step_s = 0;               // demTimeStep() shortened to divide fem.dt_s (study/tool_motion.hpp)
+  double time_step_s = 0;               // physics::demTimeStep (backends/physics/time_step.hpp) shortened to divide fem.dt_s
   double fall_time_s = 0;               // free fall from the top of the insertion stack to the floor
 };
-
-// The DEM step the deck uses: the study's explicit dem.dt_s, else dem.dt_fraction of the critical
-// step of dem.criterion: Rayleigh dt_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) at the smallest
-// particle (docs/architecture.md section 11), or StiffestSpring pi sqrt(m*/k_max) with k_max the stiffest spring
-// of LIGGGHTS' hooke law (k2max = kn * coefficientMaxElasticStiffness for hooke/hysteresis); the
-// formulas are the shared ones of both backends (docs/architecture.md section 11).
-double demTimeStep(const study::Study& study);
 
 // The LIGGGHTS atom type (1-based) of a material under the ordering above; throws BadRequest for a
 // material that is not used by the study's layers, bin or tools.

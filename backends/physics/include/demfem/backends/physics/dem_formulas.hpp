@@ -9,12 +9,19 @@
 // - hookeNormalStiffness: LIGGGHTS 3.8 normal_model_hooke, kn = 16/15 sqrt(R*) Y* (15 m* v_c^2 /
 //   (16 sqrt(R*) Y*))^(1/5), with R* and m* the effective radius and mass (a wall contact: the
 //   particle's own).
+// - edemYieldMin / edemLoadingStiffness: the EDEM hysteretic spring's loading stiffness
+//   K1 = 5 R* min(Y_i, Y_j), a yield strength of 0 meaning "not limiting" (walls: the particle's).
+// - edemUnloadingStiffness: the EDEM spring's unloading branch K2 = K1 / e^2;
+//   hookeHysteresisPeakStiffness: LIGGGHTS hooke/hysteresis k2max = kn * max(1,
+//   coefficientMaxElasticStiffness). Each is the stiffest spring its law reaches.
+// - contactHalfPeriod: pi sqrt(m* / k), the duration of an undamped linear-spring contact.
 // - closestOnTriangle: the Voronoi region of triangle (a, b, c) that holds the point nearest to p
 //   (a vertex, an edge, the face; Ericson, Real-Time Collision Detection, 5.1.5) and the barycentric
 //   weights of that point (non-negative, sum 1; zero for the nodes off the region). A point exactly
 //   on an edge is reported as that edge, never as the face.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -39,6 +46,20 @@ inline double hookeNormalStiffness(double youngs_eff_Pa, double radius_eff_m, do
   return 16.0 / 15.0 * sqrt_r * youngs_eff_Pa *
          std::pow(15.0 * mass_eff_kg * v * v / (16.0 * sqrt_r * youngs_eff_Pa), 0.2);
 }
+
+inline double edemYieldMin(double yield_i_Pa, double yield_j_Pa) {
+  return yield_i_Pa > 0 && yield_j_Pa > 0 ? std::min(yield_i_Pa, yield_j_Pa) : std::max(yield_i_Pa, yield_j_Pa);
+}
+
+inline double edemLoadingStiffness(double radius_eff_m, double yield_min_Pa) { return 5.0 * radius_eff_m * yield_min_Pa; }
+
+inline double edemUnloadingStiffness(double loading_N_m, double restitution) { return loading_N_m / (restitution * restitution); }
+
+inline double hookeHysteresisPeakStiffness(double kn_N_m, double coefficient_max_elastic_stiffness) {
+  return kn_N_m * std::max(1.0, coefficient_max_elastic_stiffness);
+}
+
+inline double contactHalfPeriod(double mass_eff_kg, double stiffness_N_m) { return std::numbers::pi * std::sqrt(mass_eff_kg / stiffness_N_m); }
 
 // Region of a triangle: vertices a, b, c; edges ab, ac, bc; the face.
 enum class TriangleRegion { A, B, C, AB, AC, BC, Face };

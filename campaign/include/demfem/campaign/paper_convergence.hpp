@@ -1,0 +1,55 @@
+// The time-step convergence study of docs/paper-reproduction.md ("Time step"): one reduced paper
+// bin run at halved fractions of the stiffest spring's critical step and at several deposition
+// seeds, each run's window statistics and FFT fit (evaluateCampaignRun), and whether a fraction's
+// numbers lie within the seed scatter of the finest step's.
+//
+// Contract
+// - reducedStudy(base, ...): `base` (a paper case, study file JSON) with the bin cut to
+//   length x width (fill height, layers, particles and contact data kept), the stroke cut, the
+//   DEM step at `fraction` of the stiffest spring (dem.criterion stiffest-spring) and the
+//   deposition seed set; the name says all three. Throws study::StudyError if that is invalid.
+// - summarize(points): points with a failure are listed but enter nothing else. The seed scatter is the sample standard deviation, over the points of the
+//   most-seeded fraction, of force mean, deformation mean and fit exponent b (0 with one seed). A
+//   fraction is within the scatter when each of its seed-1 numbers differs from the finest
+//   fraction's seed-1 number by at most 2 scatters; `converged_fraction` is the largest fraction
+//   coarser than the finest that is, and every finer one too (none without a scatter).
+// - markdown(): the table and the verdict, for the bench's output and the report.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace demfem::campaign {
+
+struct ConvergencePoint {
+  double dt_fraction = 0, dt_s = 0;
+  std::uint64_t seed = 1;
+  double force_mean_N = 0, force_std_N = 0, deformation_mean_mm = 0, deformation_std_mm = 0;
+  double fit_b = 0, fit_a = 0;
+  double wall_s = 0;
+  std::string failure;  // empty: the run finished; else why not (a blow-up: the step is unstable)
+};
+
+struct ConvergenceSummary {
+  std::vector<ConvergencePoint> points;
+  double force_scatter_N = 0, deformation_scatter_mm = 0, fit_b_scatter = 0;
+  std::size_t scatter_seeds = 0;
+  std::vector<double> within_scatter;  // fractions within the scatter of the finest
+  std::optional<double> converged_fraction;
+  std::string reduced_case;  // what was run (bin, stroke, particles), for the table's caption
+};
+
+nlohmann::ordered_json reducedStudy(const nlohmann::ordered_json& base, double length_mm, double width_mm, double stroke_mm,
+                                    double fraction, std::uint64_t seed);
+
+ConvergenceSummary summarize(std::vector<ConvergencePoint> points, std::string reduced_case);
+
+nlohmann::json toJson(const ConvergenceSummary& s);
+ConvergenceSummary convergenceFromJson(const nlohmann::json& doc);  // throws nlohmann::json::exception
+std::string markdown(const ConvergenceSummary& s);
+
+}  // namespace demfem::campaign

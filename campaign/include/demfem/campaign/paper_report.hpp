@@ -1,0 +1,85 @@
+// The paper's stated numbers and the report docs/paper-reproduction.md made from campaign runs
+// (`demfem campaign --report`, campaign/paper_campaign.hpp).
+//
+// Contract
+// - paperCases(): the one home of the numbers the paper states in its text and tables: Table 1
+//   (tool, DEM-only or DEM-FEM, depth, velocity, measurement time, computing hours on 8 cores) and
+//   Section 3's tilt ranges at 200-400 mm of tool displacement (PMMA, measured and simulated).
+//   Fig. 15's means and Fig. 17's fits are given as figures only, so the report lists ours there.
+// - A case of the report is a study file; it is matched to the paper's case by its first tool's
+//   name ("S235", "PMMA"), its kind and its depth. Its run is the campaign run directory
+//   `directory / stem` (campaign/paper_campaign.hpp); a finished run (sensors.json complete) is
+//   evaluated, any other is listed with its estimated cost only.
+// - Evaluation of a finished run (analysis/evaluation.hpp, spectrum.hpp): the run's sensors.csv as
+//   a calibrated recording; window statistics over the paper's 100-500 mm, scaled by stroke / 600 mm
+//   for a shortened stroke (the same fractions of the stroke); the tilt's range (min, max) over
+//   200-400 mm scaled the same way; the amplitude spectrum of the deformation over the window (of
+//   the force for a rigid tool) and its power-law fit A = a f^b over 1 Hz up to half the sample rate.
+// - Wall time: the run's summed wall time (kRunRecord) and the full-scale projection: the estimate
+//   of the study file as given (estimate_wall_s), times measured / estimated of the run itself.
+// - Time step: with `convergence` (the bench's JSON, campaign/paper_convergence.hpp) its table and
+//   verdict, after the explanation of the step the cases run at.
+// - Output: `paper-reproduction.md` and, with a renderer, plots/paper_force_curves.svg,
+//   plots/paper_deformation_curves.svg and plots/paper_spectra.svg (scripts beside them) in `out`
+//   (staged: nothing appears unless everything was written). Returns the report as JSON.
+// - Throws ArgumentError for a study that is not a soil-bin case, analysis::InputError for a
+//   finished run that cannot be evaluated, analysis::PlotError when gnuplot fails.
+#pragma once
+
+#include "demfem/analysis/evaluation.hpp"
+#include "demfem/analysis/plot.hpp"
+#include "demfem/analysis/spectrum.hpp"
+#include "demfem/analysis/staged_output.hpp"
+#include "demfem/campaign/paper_convergence.hpp"
+#include "demfem/study/study.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace demfem::campaign {
+
+struct PaperCase {
+  std::string tool;  // tools[0].name of the study: "S235" or "PMMA"
+  study::StudyKind kind = study::StudyKind::Coupled;
+  double depth_mm = 0, velocity_mm_s = 0, measurement_s = 0, hours = 0;
+  std::optional<std::pair<double, double>> measured_tilt_deg, simulated_tilt_deg;  // 200-400 mm
+};
+
+const std::vector<PaperCase>& paperCases();
+
+// The paper's case of a study (nullptr when none matches).
+const PaperCase* paperCaseOf(const study::Study& study);
+
+// A finished campaign run evaluated (see contract); wall_s from its kRunRecord.
+struct RunEvaluation {
+  double stroke_mm = 0, window_begin_mm = 0, window_end_mm = 0, tilt_begin_mm = 0, tilt_end_mm = 0;
+  analysis::WindowStatistics window;
+  std::optional<std::pair<double, double>> tilt_range_deg;
+  analysis::PowerLawFit fit;
+  std::string fit_signal;  // "deformation" or "force" (rigid tool)
+  analysis::Spectrum spectrum;
+  analysis::DisplacementCurve curve;
+  double wall_s = 0;
+};
+
+// Pre: `run_dir` holds a finished run of `run_study`. Throws analysis::InputError.
+RunEvaluation evaluateCampaignRun(const std::filesystem::path& run_dir, const study::Study& run_study);
+
+struct ReportOptions {
+  std::filesystem::path directory = "campaign";  // the campaign's run directories
+  std::string label;                              // e.g. the source revision the runs came from
+  std::function<double(const study::Study&)> estimate_wall_s;  // required
+  const analysis::GnuplotRenderer* renderer = nullptr;         // no plots without
+  std::optional<ConvergenceSummary> convergence;               // the "Time step" section's table
+};
+
+nlohmann::json writePaperReport(const std::vector<std::filesystem::path>& study_files, const ReportOptions& options,
+                                analysis::StagedOutput& out);
+
+}  // namespace demfem::campaign

@@ -1,0 +1,81 @@
+// `demfem campaign`: a shortened paper-style case (a few hundred FEM steps on the built-in DEM) run,
+// interrupted by Ctrl-C after its first checkpoint, resumed, not rerun once finished, equal to an
+// uninterrupted run, and reported beside the paper's numbers.
+#include "process.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+
+using namespace demfem::testing;
+
+namespace {
+
+// studies/quick.json made cheap (fastQuickStudy) with a 15 mm stroke: about 450 FEM steps.
+fs::path shortCase(const fs::path& dir) {
+  nlohmann::json study = nlohmann::json::parse(readText(fastQuickStudy(dir)));
+  study["tools"][0]["motion"]["stroke_mm"] = 15;
+  study["dem"]["threads"] = 1;
+  const fs::path file = dir / "pmma_short.json";
+  std::ofstream(file) << study.dump(2);
+  return file;
+}
+
+nlohmann::json caseOf(const fs::path& summary) { return nlohmann::json::parse(readText(summary))["cases"].at(0); }
+
+}  // namespace
+
+TEST_CASE("demfem campaign resumes an interrupted case from its checkpoint, skips a finished one and reports it", "[apps]") {
+  const fs::path dir = freshDir("campaign");
+  ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);  // inherited by the processes below
+  const fs::path study = shortCase(dir);
+  const fs::path runs = dir / "runs", run_dir = runs / "pmma_short";
+  const auto campaign = [&](const fs::path& runs_dir, const std::string& tag) {
+    return std::vector<std::string>{app("demfem"), "campaign", study.string(), "--dir", runs_dir.string(), "--checkpoint-every", "40",
+                                    "--json", (dir / (tag + ".json")).string()};
+  };
+
+  Process first(campaign(runs, "first"), dir / "first");
+  const fs::path checkpoint = run_dir / "checkpoint" / "fem_state.bin";
+  REQUIRE(waitForFile(checkpoint, first, 300s));
+  first.signal(SIGINT);
+  const int status = first.wait(60s);
+  INFO(first.err());
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  CHECK(nlohmann::json::parse(readText(run_dir / "sensors.json"))["complete"] == false);
+
+  Process second(campaign(runs, "second"), dir / "second");
+  REQUIRE(exitedOk(second.wait(300s)));
+  const nlohmann::json resumed = caseOf(dir / "second.json");
+  CHECK(resumed["state"] == "done");
+  CHECK(resumed["resumed"] == true);
+  CHECK(nlohmann::json::parse(readText(run_dir / "sensors.json"))["complete"] == true);
+
+  Process third(campaign(runs, "third"), dir / "third");
+  REQUIRE(exitedOk(third.wait(120s)));
+  CHECK(caseOf(dir / "third.json")["done_before"] == true);
+
+  // The built-in DEM's checkpoint restores bit for bit: the resumed record is the uninterrupted one.
+  Process straight(campaign(dir / "straight", "straight"), dir / "straight");
+  REQUIRE(exitedOk(straight.wait(300s)));
+  CHECK(readText(run_dir / "sensors.csv") == readText(dir / "straight" / "pmma_short" / "sensors.csv"));
+
+  Process report({app("demfem"), "campaign", study.string(), "--dir", runs.string(), "--report", (dir / "report").string(), "--json",
+                  (dir / "report.json").string()},
+                 dir / "report");
+  const int report_status = report.wait(120s);
+  INFO(report.err());
+  REQUIRE(exitedOk(report_status));
+  const nlohmann::json reported = caseOf(dir / "report.json");
+  CHECK(reported["finished"] == true);
+  CHECK(reported["stroke_mm"] == 15.0);
+  // The soil pushes against the travel: a positive load-cell force, and a spectrum that falls off.
+  CHECK(reported["force_mean_N"].get<double>() > 0);
+  CHECK(reported["fit"]["b"].get<double>() < 0);
+  const std::string md = readText(dir / "report" / "paper-reproduction.md");
+  CHECK(md.find("| pmma_short | PMMA | DEM-FEM | 18 |") != std::string::npos);
+  CHECK(md.find("| 46 |") != std::string::npos);  // Table 1's hours of the PMMA 18 mm case beside ours
+  CHECK(fs::exists(dir / "report" / "plots" / "paper_force_curves.svg"));
+  fs::remove_all(dir);
+}
