@@ -411,7 +411,7 @@ class StudyParser {
     };
     using K = GeometryKind;
     const std::vector<KeyUse> keys{
-        {"length_mm", {K::Plate, K::Gmsh, K::MatrixMarket}},
+        {"length_mm", {K::Plate, K::Gmsh, K::MatrixMarket, K::Cone}},
         {"width_mm", {K::Plate}},
         {"thickness_mm", {K::Plate}},
         {"keypoint_spacing_mm", {K::Plate, K::Cone}},
@@ -743,6 +743,9 @@ class StudyParser {
                                                "), got " + mm(value));
         }
       }
+      if (cone && length > 0 && length <= g.coneHeight_m())
+        issues_.add(path + "/geometry/length_mm", "must exceed the cone's height (" + mm(g.coneHeight_m()) +
+                                                      ", from area_mm2 and apex_angle_deg), got " + mm(length));
       if (study_.weight_drop && source.constraints_ok &&
           study_.weight_drop->pan_rows_from_tip_m >= length - c.clamp_length_m)
         issues_.add("/weight_drop/pan_rows_from_tip_mm", "must be < the free length of the tool (" +
@@ -755,12 +758,14 @@ class StudyParser {
       if (m.depth_m >= s.fill_height_m)
         issues_.add(mpath + "/depth_mm", "must be < soil.fill_height_mm (" + mm(s.fill_height_m) + "), got " +
                                              mm(m.depth_m));
+      if (cone && m.depth_m >= length)
+        issues_.add(mpath + "/depth_mm", "must be < the penetrometer length (" + mm(length) + "), got " + mm(m.depth_m));
       if (!cone && source.constraints_ok && m.depth_m >= length - c.clamp_length_m)
         issues_.add(mpath + "/depth_mm", "must be < the tool length minus the clamp (" +
                                              mm(length - c.clamp_length_m) + "), got " + mm(m.depth_m));
       // Footprint in the bin (x across, z along). start_z is the front face of a plate (its back face
       // trails by the thickness) and the axis of a cone.
-      const double half_x = cone ? std::sqrt(g.cone_area_m2 / std::numbers::pi) : g.width_m / 2;
+      const double half_x = cone ? g.coneRadius_m() : g.width_m / 2;
       const double behind = cone ? half_x : (g.kind == GeometryKind::Plate ? g.thickness_m : 0.0);
       const double ahead = cone ? half_x : m.stroke_m;
       if (g.kind == GeometryKind::Plate || cone) {
@@ -781,8 +786,7 @@ class StudyParser {
         const Tool& b = study_.tools[j];
         if (a.geometry.kind != GeometryKind::Cone || b.geometry.kind != GeometryKind::Cone) continue;
         if (!tool_sources_[i].motion_ok || !tool_sources_[j].motion_ok) continue;
-        const double reach = std::sqrt(a.geometry.cone_area_m2 / std::numbers::pi) +
-                             std::sqrt(b.geometry.cone_area_m2 / std::numbers::pi);
+        const double reach = a.geometry.coneRadius_m() + b.geometry.coneRadius_m();
         const double distance = std::hypot(a.motion.center_x_m - b.motion.center_x_m,
                                            a.motion.start_z_m - b.motion.start_z_m);
         if (distance < reach)
@@ -818,7 +822,9 @@ class StudyParser {
       double area = 0;  // surface carrying keypoints; meshes from files bring their own
       if (g.kind == GeometryKind::Plate)
         area = 2 * (g.length_m * g.width_m + g.length_m * g.thickness_m + g.width_m * g.thickness_m);
-      if (g.kind == GeometryKind::Cone) area = g.cone_area_m2 * (1 + 1 / std::sin(g.cone_angle_rad / 2));
+      if (g.kind == GeometryKind::Cone)  // cone mantle, shaft mantle above the cone, top disc
+        area = g.cone_area_m2 * (2 + 1 / std::sin(g.cone_angle_rad / 2)) +
+               2 * std::numbers::pi * g.coneRadius_m() * std::max(0.0, g.length_m - g.coneHeight_m());
       if (area / (spacing * spacing) > kMaxKeypoints)
         issues_.add(tool_sources_[i].path + "/geometry/keypoint_spacing_mm",
                     "gives about " + formatNumber(std::round(area / (spacing * spacing))) +

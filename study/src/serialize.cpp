@@ -116,6 +116,7 @@ ordered_json toolJson(const Tool& tool, StudyKind kind) {
       geometry["keypoint_file"] = g.keypoint_file.string();
       break;
     case GeometryKind::Cone:
+      put(geometry, "length_mm", g.length_m);
       put(geometry, "area_mm2", g.cone_area_m2);
       put(geometry, "apex_angle_deg", g.cone_angle_rad);
       put(geometry, "keypoint_spacing_mm", g.keypoint_spacing_m);

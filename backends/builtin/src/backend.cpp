@@ -2,7 +2,7 @@
 
 #include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/adapter/output_files.hpp"
-#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/adapter/tool_surface.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/study/tool_motion.hpp"
@@ -242,11 +242,12 @@ class BuiltinBackend final : public adapter::CouplingApi {
 }  // namespace
 
 TriangleMesh toolMesh(const study::Tool& tool) {
-  if (tool.geometry.kind != study::GeometryKind::Plate)
-    throw CouplingError(ErrorCode::Unsupported, "builtin DEM: tool '" + tool.name +
-                                                    "': only plate tools are meshed by the builtin backend so far");
-  const auto surface = adapter::makePlateSurface(tool.geometry.length_m, tool.geometry.width_m, tool.geometry.thickness_m,
-                                                 tool.geometry.keypoint_spacing_m);
+  adapter::ToolSurface surface;
+  try {
+    surface = adapter::toolSurface(tool);
+  } catch (const std::invalid_argument& e) {
+    throw CouplingError(ErrorCode::Unsupported, std::string("builtin DEM: ") + e.what());
+  }
   TriangleMesh mesh;
   mesh.name = tool.name;
   for (const auto& n : surface.nodes) mesh.rest_nodes.push_back({n[0], n[1], n[2]});

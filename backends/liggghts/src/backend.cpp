@@ -338,7 +338,7 @@ adapter::SettledSoil depositInInstance(const study::Study& study, const InputDec
 
 struct ToolState {
   std::string name;
-  adapter::PlateSurface surface;
+  adapter::ToolSurface surface;
   LAMMPS_NS::FixMeshSurface* mesh_fix = nullptr;
   std::unique_ptr<NodeArrayAccess> node_access;
   int id_offset = 0;                 // LIGGGHTS triangle id of surface triangle 0
