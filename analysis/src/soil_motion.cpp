@@ -90,34 +90,66 @@ bool Box::contains(const double* p) const {
 
 Box ToolFrame::bounds() const { return boundsOf(node_m); }
 
-VelocityMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m) {
-  if (!(cell_m > 0) || !(half_thickness_m > 0)) throw InputError("velocity section: the cell size and the half thickness must be > 0");
-  if (frame.size() == 0) throw InputError("velocity section: the frame has no particles");
-  VelocityMap map;
+namespace {
+
+// An empty map over the frame's centres on the axes (u_axis, v_axis) with cells of `cell`.
+SectionMap emptyMap(const ParticleFrame& frame, Axis axis, int u_axis, int v_axis, double cell_m) {
+  if (!(cell_m > 0)) throw InputError("section map: the cell size must be > 0");
+  if (frame.size() == 0) throw InputError("section map: the frame has no particles");
+  SectionMap map;
   map.axis = axis;
-  map.position_m = position_m;
-  map.half_thickness_m = half_thickness_m;
   map.cell_m = cell_m;
-  const int normal = axis == Axis::X ? 0 : 1, u_axis = 2, v_axis = axis == Axis::X ? 1 : 0;
   const Box all = boundsOf(frame.position_m);
   map.u0_m = all.lo[u_axis];
   map.v0_m = all.lo[v_axis];
   map.nu = 1 + static_cast<int>(std::floor((all.hi[u_axis] - map.u0_m) / cell_m + 1e-9));
   map.nv = 1 + static_cast<int>(std::floor((all.hi[v_axis] - map.v0_m) / cell_m + 1e-9));
-  std::vector<double> sum(static_cast<std::size_t>(map.nu) * map.nv, 0.0);
+  map.values.assign(static_cast<std::size_t>(map.nu) * map.nv, std::numeric_limits<double>::quiet_NaN());
+  return map;
+}
+
+std::size_t cellOf(const SectionMap& map, const double* p, int u_axis, int v_axis) {
+  const int iu = std::min(map.nu - 1, static_cast<int>(std::floor((p[u_axis] - map.u0_m) / map.cell_m + 1e-9)));
+  const int iv = std::min(map.nv - 1, static_cast<int>(std::floor((p[v_axis] - map.v0_m) / map.cell_m + 1e-9)));
+  return static_cast<std::size_t>(iv) * map.nu + iu;
+}
+
+}  // namespace
+
+SectionMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m) {
+  if (!(half_thickness_m > 0)) throw InputError("velocity section: the half thickness must be > 0");
+  const int normal = axis == Axis::X ? 0 : 1, u_axis = 2, v_axis = axis == Axis::X ? 1 : 0;
+  SectionMap map = emptyMap(frame, axis, u_axis, v_axis, cell_m);
+  map.position_m = position_m;
+  map.half_thickness_m = half_thickness_m;
+  std::vector<double> sum(map.values.size(), 0.0);
   std::vector<std::size_t> count(sum.size(), 0);
   for (std::size_t i = 0; i < frame.size(); ++i) {
     const double* p = &frame.position_m[3 * i];
     if (std::fabs(p[normal] - position_m) > half_thickness_m) continue;
-    const int iu = std::min(map.nu - 1, static_cast<int>(std::floor((p[u_axis] - map.u0_m) / cell_m + 1e-9)));
-    const int iv = std::min(map.nv - 1, static_cast<int>(std::floor((p[v_axis] - map.v0_m) / cell_m + 1e-9)));
-    const std::size_t k = static_cast<std::size_t>(iv) * map.nu + iu;
+    const std::size_t k = cellOf(map, p, u_axis, v_axis);
     sum[k] += frame.speed(i);
     ++count[k];
   }
-  map.speed_m_s.resize(sum.size());
   for (std::size_t k = 0; k < sum.size(); ++k)
-    map.speed_m_s[k] = count[k] ? sum[k] / static_cast<double>(count[k]) : std::numeric_limits<double>::quiet_NaN();
+    if (count[k]) map.values[k] = sum[k] / static_cast<double>(count[k]);
+  return map;
+}
+
+SectionMap mixingSection(const ParticleFrame& frame, double cell_m) {
+  SectionMap map = emptyMap(frame, Axis::X, 2, 1, cell_m);
+  std::vector<std::map<int, std::size_t>> cells(map.values.size());
+  std::map<int, std::size_t> labels;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    ++cells[cellOf(map, &frame.position_m[3 * i], 2, 1)][frame.layer[i]];
+    ++labels[frame.layer[i]];
+  }
+  const double total = entropy(labels, frame.size());
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    std::size_t n = 0;
+    for (const auto& [label, c] : cells[k]) n += c;
+    if (n) map.values[k] = total > 0 ? entropy(cells[k], n) / total : 0.0;
+  }
   return map;
 }
 

@@ -2,7 +2,6 @@
 // backend) and serves it over the demfem protocol until the FEM client shuts it down.
 #include "demfem/adapter/server.hpp"
 #include "demfem/adapter/test_backends.hpp"
-#include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
 #include "demfem/cli/soil_supply.hpp"
@@ -41,36 +40,6 @@ std::chrono::milliseconds millis(double seconds) {
   return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
 }
 
-// A soil deposited by the other backend than the one serving is deposited here (this process,
-// before the backend is built) when its file is missing; the serving backend deposits its own.
-void provideSoil(const study::Study& study, const std::string& backend) {
-  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
-  const std::string& deposition = study::depositionBackendName(study.soil.deposition_backend);
-  if (std::filesystem::exists(file) || deposition == backend) return;
-  std::cerr << "demfem-dem: depositing the soil with " << deposition << " into " << file.string() << std::endl;
-  cli::DepositCost cost;
-  adapter::writeSettledSoil(file, cli::depositWith(study.soil.deposition_backend, study, study.dem.threads, cost, false));
-}
-
-std::unique_ptr<adapter::CouplingApi> makeSoilBackend(const std::string& backend, const study::Study& study) {
-  if (backend == "builtin") {
-    cli::Progress deposition("deposition", true);  // reports only when the backend deposits
-    auto api = builtin::makeBackend(study, [&deposition](double fraction, const std::string& stage_line) {
-      if (!stage_line.empty()) std::cerr << "deposition: " << stage_line << std::endl;
-      deposition.update(fraction);
-    });
-    deposition.finish();
-    return api;
-  }
-#if DEMFEM_WITH_LIGGGHTS
-  if (backend == "liggghts") return liggghts::makeBackend(study);
-#else
-  if (backend == "liggghts")
-    throw cli::InputError("this demfem-dem was built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF)");
-#endif
-  throw std::logic_error("makeSoilBackend: not a soil backend: " + backend);
-}
-
 std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::string& backend,
                                                    const std::optional<study::Study>& study) {
   const auto& tests = adapter::testBackendNames();
@@ -79,11 +48,7 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::s
   if (backend != "builtin" && backend != "liggghts")
     throw cli::InputError("unknown backend '" + backend + "' (builtin, liggghts, constant, harmonic, spring)");
   if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
-  provideSoil(*study, backend);
-  auto api = makeSoilBackend(backend, *study);
-  const auto file = adapter::settledSoilFile(*study, adapter::defaultSoilDirectory());
-  cli::requireSettled(adapter::readSettledSoil(file, *study), file, o.allow_unsettled_soil);
-  return api;
+  return cli::openSoilBackend(backend, *study, o.allow_unsettled_soil);
 }
 
 

@@ -1,5 +1,6 @@
 #include "demfem/cli/soil_supply.hpp"
 
+#include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
@@ -46,6 +47,47 @@ void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::pat
   throw InputError("the settled soil " + file.string() + " is not settled: " + reason +
                    ". Raise soil.deposition.settle_kinetic_energy_J and deposit it again (demfem deposit --force), "
                    "or run on it anyway with --allow-unsettled-soil");
+}
+
+namespace {
+
+// A soil deposited by the other backend than the one serving is deposited here (this process,
+// before the backend is built) when its file is missing; the serving backend deposits its own.
+void provideSoil(const study::Study& study, const std::string& backend) {
+  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+  const std::string& deposition = study::depositionBackendName(study.soil.deposition_backend);
+  if (std::filesystem::exists(file) || deposition == backend) return;
+  std::cerr << "depositing the soil with " << deposition << " into " << file.string() << std::endl;
+  DepositCost cost;
+  adapter::writeSettledSoil(file, depositWith(study.soil.deposition_backend, study, study.dem.threads, cost, false));
+}
+
+std::unique_ptr<adapter::CouplingApi> makeSoilBackend(const std::string& backend, const study::Study& study) {
+  if (backend == "builtin") {
+    Progress deposition("deposition", true);  // reports only when the backend deposits
+    auto api = builtin::makeBackend(study, [&deposition](double fraction, const std::string& stage_line) {
+      if (!stage_line.empty()) std::cerr << "deposition: " << stage_line << std::endl;
+      deposition.update(fraction);
+    });
+    deposition.finish();
+    return api;
+  }
+#if DEMFEM_WITH_LIGGGHTS
+  if (backend == "liggghts") return liggghts::makeBackend(study);
+#else
+  if (backend == "liggghts") throw InputError("built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF)");
+#endif
+  throw InputError("unknown soil backend '" + backend + "' (builtin, liggghts)");
+}
+
+}  // namespace
+
+std::unique_ptr<adapter::CouplingApi> openSoilBackend(const std::string& backend, const study::Study& study, bool allow_unsettled) {
+  provideSoil(study, backend);
+  auto api = makeSoilBackend(backend, study);
+  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+  requireSettled(adapter::readSettledSoil(file, study), file, allow_unsettled);
+  return api;
 }
 
 }  // namespace demfem::cli

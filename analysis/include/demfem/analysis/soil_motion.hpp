@@ -25,7 +25,8 @@
 //   weighted by the cell's particles, over the entropy of all labels; cells are columns of `cell` in
 //   x and z cut at the given boundary heights. 0 when every cell holds one layer (untouched layers,
 //   cut at their boundaries), 1 when every cell holds the labels in the proportions of the whole (a
-//   random permutation tends to it). A frame with a single label: 0.
+//   random permutation tends to it). A frame with a single label: 0. mixingSection() maps the same
+//   normalised entropy per (z, y) cell (the layer-mixing map).
 // - loadRun(): the frames listed by DIR/vtk/particles.pvd and the tool surfaces by DIR/vtk/dem-TOOL.pvd
 //   (the only DEM tool collection when `tool` is empty), matched by time (within 1e-9 s);
 //   readParticleFrame() one particle file. Both throw InputError naming the file (missing collection,
@@ -59,16 +60,18 @@ struct Box {
 
 enum class Axis { X, Y };
 
-struct VelocityMap {
+// A section binned into square cells: mean speed (m/s) of velocitySection(), normalised layer
+// entropy of mixingSection().
+struct SectionMap {
   Axis axis = Axis::X;
   double position_m = 0, half_thickness_m = 0, cell_m = 0;
   double u0_m = 0, v0_m = 0;      // lower corner of the map (z, then y or x)
   int nu = 0, nv = 0;             // cells along the map's u (z) and v axes
-  std::vector<double> speed_m_s;  // nu x nv, u fastest; NaN = empty cell
-  double at(int iu, int iv) const { return speed_m_s[static_cast<std::size_t>(iv) * nu + iu]; }
+  std::vector<double> values;     // nu x nv, u fastest; NaN = empty cell
+  double at(int iu, int iv) const { return values[static_cast<std::size_t>(iv) * nu + iu]; }
 };
 
-VelocityMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m);
+SectionMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m);
 
 struct MovingExtent {
   double threshold_m_s = 0;
@@ -89,6 +92,10 @@ SpeedRange frontVelocityRange(const ParticleFrame& frame, const Box& box);
 std::vector<double> layerBoundaries(const ParticleFrame& frame);
 
 double mixingIndex(const ParticleFrame& frame, double cell_m, const std::vector<double>& boundaries_y_m);
+
+// The layer mixing along the bin: cells of `cell` in z and y over the whole width, each holding the
+// entropy of its particles' labels over the entropy of all labels (0 one layer, 1 fully mixed).
+SectionMap mixingSection(const ParticleFrame& frame, double cell_m);
 
 struct ToolFrame {
   double time_s = 0;

@@ -10,12 +10,16 @@
 //   `quiet`, it reports progress with time left and each stage's summary on standard error.
 // - An unsettled soil (a settling stage hit its time cap, or the final kinetic energy is not below
 //   soil.deposition.settle_kinetic_energy_J) is refused by requireSettled() unless allowed.
+// - openSoilBackend(): the DEM backend of a soil study in this process (demfem-dem serves it,
+//   `demfem cpt` pushes its cones).
 #pragma once
 
+#include "demfem/adapter/coupling_api.hpp"
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/study/study.hpp"
 
 #include <filesystem>
+#include <memory>
 #include <string>
 
 namespace demfem::cli {
@@ -30,5 +34,10 @@ adapter::SettledSoil depositWith(study::DepositionBackend backend, const study::
 
 // Throws InputError naming `file` and the reason when the soil is not settled and !allow_unsettled.
 void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::path& file, bool allow_unsettled);
+
+// The study's soil DEM `backend` ("builtin" or "liggghts", in this process) on its settled soil: a soil
+// file missing is deposited first (by the study's deposition backend; the built-in backend deposits
+// its own with progress on standard error), then checked by requireSettled().
+std::unique_ptr<adapter::CouplingApi> openSoilBackend(const std::string& backend, const study::Study& study, bool allow_unsettled);
 
 }  // namespace demfem::cli
