@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <system_error>
+#include <thread>
 
 namespace demfem::adapter {
 
@@ -84,7 +85,10 @@ void renameChecked(const fs::path& from, const fs::path& to) {
 }
 
 void writeFileAtomically(const fs::path& file, std::string_view bytes) {
-  const fs::path tmp = file.string() + ".tmp";
+  // One temporary per process and thread: concurrent writers of one file never share it.
+  std::ostringstream tag;
+  tag << ::getpid() << '-' << std::this_thread::get_id();
+  const fs::path tmp = file.string() + "." + tag.str() + ".partial";
   try {
     CheckedFile out(tmp, CheckedFile::Mode::Truncate);
     out.write(bytes);

@@ -18,9 +18,9 @@ T expect(p::ReplyBody&& body, const std::string& endpoint, const char* op) {
 
 }  // namespace
 
-RemoteProxy::RemoteProxy(const RemoteOptions& options, zmq::context_t* context) : endpoint_(options.endpoint) {
+RemoteProxy::RemoteProxy(const RemoteOptions& options, protocol::Context* context) : endpoint_(options.endpoint) {
   if (!context) {
-    own_context_ = std::make_unique<zmq::context_t>(1);
+    own_context_ = std::make_unique<protocol::Context>();
     context = own_context_.get();
   }
   socket_ = std::make_unique<p::ClientSocket>(*context, options.endpoint, options.timeout, options.security);

@@ -9,6 +9,7 @@
 
 namespace demfem::adapter {
 
+
 namespace p = protocol;
 
 namespace {

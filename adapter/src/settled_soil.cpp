@@ -1,5 +1,7 @@
 #include "demfem/adapter/settled_soil.hpp"
 
+#include "demfem/adapter/output_files.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -57,21 +59,21 @@ nlohmann::json headerJson(const SettledSoil& soil) {
 }
 
 // The whole file, read and checked: magic, version, checksum, header and length.
-struct CheckedFile {
+struct CheckedSoilFile {
   std::string bytes;
   nlohmann::json header;
   std::size_t particles_at = 0;
   std::uint64_t checksum = 0;
 };
 
-CheckedFile readChecked(const std::filesystem::path& file) {
+CheckedSoilFile readChecked(const std::filesystem::path& file) {
   const auto fail = [&file](const std::string& what) {
     return std::runtime_error("settled soil file " + file.string() + ": " + what +
                               " (delete it and deposit the soil again: demfem deposit STUDY)");
   };
   std::ifstream in(file, std::ios::binary);
   if (!in) throw fail("cannot be opened");
-  CheckedFile f;
+  CheckedSoilFile f;
   f.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   if (in.bad()) throw fail("read error");
   const std::string& b = f.bytes;
@@ -116,23 +118,16 @@ void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil
   append(bytes, study::fnv1a64(bytes));
 
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
-  // A unique name per process: concurrent depositions of one soil never write into the same file.
-  const std::filesystem::path partial = file.string() + "." + std::to_string(::getpid()) + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(partial, ignored);
-      throw std::runtime_error("settled soil file " + partial.string() + ": write failed");
-    }
+  // Concurrent depositions of one soil write their own temporaries (output_files.hpp).
+  try {
+    writeFileAtomically(file, bytes);
+  } catch (const OutputError& e) {
+    throw std::runtime_error("settled soil file " + file.string() + ": " + e.what());
   }
-  std::filesystem::rename(partial, file);
 }
 
 SettledSoil readSettledSoil(const std::filesystem::path& file) {
-  const CheckedFile f = readChecked(file);
+  const CheckedSoilFile f = readChecked(file);
   const auto fail = [&file](const std::string& what) {
     return std::runtime_error("settled soil file " + file.string() + ": " + what);
   };

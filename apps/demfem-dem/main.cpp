@@ -1,17 +1,14 @@
 // demfem-dem: the DEM adapter server. Builds a DEM backend (built-in, LIGGGHTS or an analytic test
 // backend) and serves it over the demfem protocol until the FEM client shuts it down.
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/server.hpp"
-#include "demfem/adapter/test_backends.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
 #include "demfem/cli/soil_supply.hpp"
 #include "demfem/protocol/transport.hpp"
 #include "demfem/study/study.hpp"
-#if DEMFEM_WITH_LIGGGHTS
-#include "demfem/backends/liggghts/backend.hpp"
-#endif
 
-#include <algorithm>
 #include <fstream>
 #include <iostream>
 
@@ -40,17 +37,13 @@ std::chrono::milliseconds millis(double seconds) {
   return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
 }
 
-std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const std::string& backend,
+std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const cli::BackendEntry& backend,
                                                    const std::optional<study::Study>& study) {
-  const auto& tests = adapter::testBackendNames();
-  if (std::find(tests.begin(), tests.end(), backend) != tests.end())
-    return adapter::makeTestBackend(backend, study ? study->tools : std::vector<study::Tool>{study::Tool{}}, o.load);
-  if (backend != "builtin" && backend != "liggghts")
-    throw cli::InputError("unknown backend '" + backend + "' (builtin, liggghts, constant, harmonic, spring)");
-  if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
+  if (!backend.capabilities.simulates_soil) return backend.make(study, o.load);
+  const std::string& name = backend.capabilities.name;
+  if (!study) throw cli::InputError("--study is required for the '" + name + "' backend");
   return cli::openSoilBackend(backend, *study, o.allow_unsettled_soil);
 }
-
 
 void run(const Options& o) {
   if (!o.make_curve_keys.empty()) {
@@ -61,17 +54,15 @@ void run(const Options& o) {
     return;
   }
   std::optional<study::Study> study;
-  if (!o.study_file.empty()) study = study::loadStudy(o.study_file);
+  if (!o.study_file.empty()) study = cli::loadCheckedStudy(o.study_file);
   if (o.threads > 0 && study) study->dem.threads = o.threads;
   if (study && !o.output_dir.empty()) study->output.directory = o.output_dir;
-  const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : "builtin";
-#if DEMFEM_WITH_LIGGGHTS
-  if (backend == "liggghts" && !liggghts::isLeaderRank()) {
-    if (!study) throw cli::InputError("--study is required for the 'liggghts' backend");
-    liggghts::followLeader(*study);  // non-leader MPI rank: no socket
-    return;
+  const std::string backend = !o.backend.empty() ? o.backend : study ? study->dem.backend : study::DemSettings{}.backend;
+  const cli::BackendEntry& entry = cli::findBackend(backend);
+  if (entry.follow) {
+    if (!study) throw cli::InputError("--study is required for the '" + backend + "' backend");
+    if (entry.follow(*study)) return;
   }
-#endif
   std::string endpoint = o.bind;
   if (endpoint.empty()) endpoint = study && !study->coupling.endpoint.empty() ? study->coupling.endpoint : "tcp://127.0.0.1:5555";
   const double idle_s = o.idle_timeout_s > 0 ? o.idle_timeout_s : 2.0 * (study ? study->coupling.timeout_s : 30.0);
@@ -83,13 +74,11 @@ void run(const Options& o) {
   } catch (const std::invalid_argument& e) {
     throw cli::InputError(std::string("--bind: ") + e.what());
   }
-  auto api = makeBackend(o, backend, study);
-  zmq::context_t context(1);
+  auto api = makeBackend(o, entry, study);
+  protocol::Context context;
   protocol::ServerSocket socket(context, endpoint, security);
   if (!o.endpoint_file.empty()) {
-    const std::string tmp = o.endpoint_file + ".partial";
-    { std::ofstream(tmp) << socket.endpoint() << '\n'; }
-    std::filesystem::rename(tmp, o.endpoint_file);
+    adapter::writeFileAtomically(o.endpoint_file, socket.endpoint() + "\n");
   }
   std::cerr << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
             << (security ? " (CurveZMQ)" : "") << std::endl;
@@ -115,9 +104,10 @@ int main(int argc, char** argv) {
                "(docs/protocol.md) to one FEM client until it shuts the backend down."};
   app.name("demfem-dem");
   Options o;
-  app.add_option("--backend", o.backend,
-                 "builtin | liggghts | constant | harmonic | spring (analytic test backends); default: the study's "
-                 "dem.backend, else builtin");
+  std::string backends;
+  for (const cli::BackendEntry& e : cli::backendRegistry())
+    backends += (backends.empty() ? "" : " | ") + e.capabilities.name + (e.capabilities.simulates_soil ? "" : " (test)");
+  app.add_option("--backend", o.backend, backends + "; default: the study's dem.backend, else builtin");
   app.add_option("--study", o.study_file, "Study file (JSON); optional for test backends (default plate tool)")
       ->check(CLI::ExistingFile);
   app.add_option("--bind", o.bind,

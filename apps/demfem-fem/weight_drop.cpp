@@ -2,6 +2,7 @@
 // file of kind weight-drop: a calibrated recording (CSV t_s,force_N,deformation_mm + its JSON
 // sidecar, docs/analysis.md) that `demfem evaluate` / `compare` take as it is, and the steady value,
 // frequency and damping ratio fitted to the whole record (analysis/include/demfem/analysis/step_fit.hpp).
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/analysis/step_fit.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
@@ -12,6 +13,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <sstream>
 
 namespace demfem::cli {
 
@@ -19,16 +22,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Writes `text` to `path` through `path.partial` and a rename; throws naming the file on failure.
+// Writes what `text` prints to `path` atomically and checked (adapter/output_files.hpp).
 void writeFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& text) {
-  const fs::path partial = path.string() + ".partial";
-  {
-    std::ofstream out(partial);
-    if (!out) throw std::runtime_error("cannot write " + partial.string());
-    text(out);
-    if (!out) throw std::runtime_error("writing " + partial.string() + " failed");
-  }
-  fs::rename(partial, path);
+  std::ostringstream out;
+  text(out);
+  adapter::writeFileAtomically(path, out.str());
 }
 
 nlohmann::json fitJson(const analysis::StepResponseFit& fit, const std::string& unit) {

@@ -4,6 +4,7 @@
 #include "commands.hpp"
 
 #include "demfem/campaign/calibration.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/cli/progress.hpp"
 
 #include <atomic>
@@ -29,7 +30,7 @@ struct CalibrateOptions {
 };
 
 nlohmann::ordered_json readStudyJson(const std::string& file) {
-  study::loadStudy(file);  // a clear message for an invalid study before anything else
+  cli::loadCheckedStudy(file);  // a clear message for an invalid study before anything else
   std::ifstream in(file);
   return nlohmann::ordered_json::parse(in);
 }
@@ -49,7 +50,7 @@ std::vector<campaign::Stage> stagesOf(const CalibrateOptions& o, const nlohmann:
 void run(CalibrateOptions& o, const std::string& json_target) {
   finishAnalysisOptions(o.analysis);
   const nlohmann::ordered_json study_json = readStudyJson(o.study_file);
-  const study::Study study = study::loadStudy(o.study_file);
+  const study::Study study = cli::loadCheckedStudy(o.study_file);
   std::vector<std::filesystem::path> paths(o.recordings.begin(), o.recordings.end());
   const auto recordings = analysis::readRecordings(paths);
   const auto stages = stagesOf(o, study_json, recordings);

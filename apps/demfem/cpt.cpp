@@ -43,12 +43,14 @@ analysis::CptSoil cptSoil(const study::Study& study, const std::vector<adapter::
 }
 
 analysis::CptSoil pushStudyCones(const std::string& study_file, const CptOptions& o) {
-  study::Study study = study::loadStudy(study_file);
+  study::Study study = loadCheckedStudy(study_file);
   if (study.kind != study::StudyKind::ConePenetration)
     throw InputError(study_file + ": /kind: demfem cpt runs cone-penetration studies only");
   if (o.threads > 0) study.dem.threads = o.threads;
   study.output.directory = std::filesystem::path(o.output_dir) / "runs" / study.name;  // the backend's VTK files
-  const std::string backend = o.backend.empty() ? study.dem.backend : o.backend;
+  const BackendEntry& backend = findBackend(o.backend.empty() ? study.dem.backend : o.backend);
+  if (!backend.capabilities.simulates_soil)
+    throw InputError("backend '" + backend.capabilities.name + "' simulates no soil: cone penetration needs a soil backend");
   const auto dem = openSoilBackend(backend, study, o.allow_unsettled_soil);
   Progress progress("cone penetration " + study.name, !o.quiet);
   const auto records = adapter::pushCones(*dem, study, [&](std::int64_t done, std::int64_t total) {
@@ -105,7 +107,7 @@ void addCptOptions(CLI::App& cmd, CptOptions& o) {
   cmd.add_option("--measured", o.measured, "Measured CPR profiles: CSV depth_mm,CPR_kPa with a JSON sidecar (repeatable)")
       ->check(CLI::ExistingFile);
   cmd.add_option("--depth-step-mm", o.depth_step_mm, "Depth grid of the statistics (mm)")->capture_default_str();
-  cmd.add_option("--backend", o.backend, "DEM backend (default: the study's dem.backend)")->check(CLI::IsMember({"builtin", "liggghts"}));
+  cmd.add_option("--backend", o.backend, "DEM backend (default: the study's dem.backend)");
   cmd.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM (default: the study's dem.threads)")->check(CLI::PositiveNumber);
   cmd.add_flag("--allow-unsettled-soil", o.allow_unsettled_soil, "Run even if the settled soil is not settled");
   cmd.add_flag("--no-plots", o.no_plots, "Do not draw plots");

@@ -3,6 +3,7 @@
 // study on the same soil, on either DEM backend, starts from.
 #include "commands.hpp"
 #include "demfem/adapter/settled_soil.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/soil_supply.hpp"
 #include "demfem/study/study.hpp"
@@ -74,7 +75,7 @@ void addDepositCommand(CLI::App& app) {
   cmd->add_flag("--quiet", opt->quiet, "No progress output");
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([opt, &json_target] {
-    study::Study s = study::loadStudy(opt->study_file);
+    study::Study s = cli::loadCheckedStudy(opt->study_file);
     if (!opt->backend.empty()) s.soil.deposition_backend = study::parseDepositionBackend(opt->backend);
     const std::filesystem::path dir =
         opt->soil_dir.empty() ? adapter::defaultSoilDirectory() : std::filesystem::path(opt->soil_dir);

@@ -4,6 +4,7 @@
 #include "commands.hpp"
 
 #include "demfem/campaign/diagnose.hpp"
+#include "demfem/cli/backend_registry.hpp"
 
 #include <atomic>
 #include <chrono>
@@ -26,7 +27,7 @@ struct DiagnoseOptions {
 };
 
 nlohmann::ordered_json readStudyJson(const std::string& file) {
-  study::loadStudy(file);  // a clear message for an invalid study before anything else
+  cli::loadCheckedStudy(file);  // a clear message for an invalid study before anything else
   std::ifstream in(file);
   return nlohmann::ordered_json::parse(in);
 }
@@ -34,7 +35,7 @@ nlohmann::ordered_json readStudyJson(const std::string& file) {
 void run(DiagnoseOptions& o, const std::string& json_target) {
   finishAnalysisOptions(o.analysis);
   const nlohmann::ordered_json study_json = readStudyJson(o.study_file);
-  const study::Study study = study::loadStudy(o.study_file);
+  const study::Study study = cli::loadCheckedStudy(o.study_file);
   const auto recordings = analysis::readRecordings(std::vector<std::filesystem::path>(o.recordings.begin(), o.recordings.end()));
   auto& c = o.settings.calibration;
   c.objective.analysis = o.analysis.settings;

@@ -8,6 +8,7 @@
 #include "commands.hpp"
 
 #include "demfem/adapter/settled_soil.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/soil_supply.hpp"
 #include "demfem/study/study.hpp"
@@ -182,7 +183,7 @@ class RunDirectory {
 }
 
 void runLocal(const RunOptions& o, const std::string& json_target) {
-  const study::Study study = study::loadStudy(o.study_file);  // validate before starting anything
+  const study::Study study = cli::loadCheckedStudy(o.study_file);  // validate before starting anything
   if (study.kind == study::StudyKind::WeightDrop)
     throw InputError(o.study_file + ": a weight-drop study has no DEM side; run it with: demfem-fem weight-drop " + o.study_file);
   if (study.kind == study::StudyKind::ConePenetration) {  // no FEM side: the cones are pushed in this process
@@ -196,7 +197,7 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
     return;
   }
   const std::string& backend = o.backend.empty() ? study.dem.backend : o.backend;
-  if (study::hasSoil(study.kind) && (backend == "builtin" || backend == "liggghts")) {
+  if (study::hasSoil(study.kind) && findBackend(backend).capabilities.simulates_soil) {
     // A soil already deposited is checked before anything starts (demfem-dem checks one it deposits).
     const fs::path soil = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
     if (fs::exists(soil)) requireSettled(adapter::readSettledSoil(soil, study), soil, o.allow_unsettled_soil);

@@ -1,6 +1,7 @@
 // `demfem validate STUDY...`: checks study files and prints their effective values with units.
 #include "commands.hpp"
 #include "run_cost.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
 
@@ -61,7 +62,7 @@ void addValidateCommand(CLI::App& app) {
     const bool text = json_target != "-";  // stdout carries the JSON document instead
     for (const std::string& file : *files) {
       try {
-        const study::Study s = study::loadStudy(file);
+        const study::Study s = cli::loadCheckedStudy(file);
         const std::string hash = study::hasSoil(s.kind) ? study::soilHash(s) : std::string();
         const RunCost cost = estimateRunCost(s);
         if (text) {

@@ -28,7 +28,7 @@ Result measure(const std::string& transport, const std::string& endpoint, int re
   study::Tool pmma;
   pmma.geometry.thickness_m = 0.004;
   auto backend = adapter::makeTestBackend("constant", {pmma}, adapter::TestLoad{});
-  zmq::context_t context(1);
+  protocol::Context context;
   protocol::ServerSocket socket(context, endpoint);
   adapter::ServerOptions options;
   options.idle_timeout = 10s;

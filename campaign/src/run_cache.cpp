@@ -1,5 +1,7 @@
 #include "demfem/campaign/run_cache.hpp"
 
+#include "demfem/adapter/output_files.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
@@ -71,18 +73,11 @@ void RunCache::store(const std::string& model_name, const study::Study& study, c
                                   {"deformation_mm", recording.deformation},
                                   {"displacement_mm", recording.displacement_mm}}}};
   const fs::path file = directory_ / (key(model_name, study, case_key) + ".json");
-  std::ostringstream tag;
-  tag << std::this_thread::get_id();
-  const fs::path temporary = file.string() + "." + tag.str() + ".partial";
-  {
-    std::ofstream out(temporary);
-    out << entry.dump();
-    out.close();
-    if (!out) throw std::runtime_error("run cache: cannot write " + temporary.string());
+  try {
+    adapter::writeFileAtomically(file, entry.dump());
+  } catch (const adapter::OutputError& e) {
+    throw std::runtime_error(std::string("run cache: ") + e.what());
   }
-  std::error_code ec;
-  fs::rename(temporary, file, ec);
-  if (ec) throw std::runtime_error("run cache: cannot rename " + temporary.string() + " to " + file.string() + ": " + ec.message());
 }
 
 }  // namespace demfem::campaign

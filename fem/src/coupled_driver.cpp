@@ -1,6 +1,7 @@
 #include "demfem/fem/coupled_driver.hpp"
 
 #include "demfem/adapter/output_files.hpp"
+#include "demfem/adapter/tool_drive.hpp"
 #include "demfem/fem/integrator.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/sensors.hpp"

@@ -1,11 +1,14 @@
 #include "demfem/protocol/transport.hpp"
 
+#include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include <atomic>
 #include <cstring>
 #include <fstream>
 #include <regex>
 #include <stdexcept>
+#include <thread>
 
 namespace demfem::protocol {
 
@@ -135,38 +138,55 @@ class ServerSocket::ZapHandler {
   std::thread thread_;
 };
 
-ServerSocket::ServerSocket(zmq::context_t& context, const std::string& endpoint,
-                           const std::optional<ServerSecurity>& security) {
+struct Context::Impl {
+  zmq::context_t context{1};
+};
+
+Context::Context() : impl_(std::make_unique<Impl>()) {}
+Context::~Context() = default;
+
+struct ServerSocket::Sockets {
+  zmq::socket_t socket;
+};
+
+struct ClientSocket::Sockets {
+  zmq::socket_t socket;
+  zmq::socket_t monitor;  // handshake events: tells a refused key from a silent peer
+};
+
+ServerSocket::ServerSocket(Context& shared, const std::string& endpoint, const std::optional<ServerSecurity>& security)
+    : sockets_(std::make_unique<Sockets>()) {
+  zmq::context_t& context = shared.impl_->context;
   checkBindEndpoint(endpoint, security.has_value());
   if (security) zap_ = std::make_unique<ZapHandler>(context, security->authorized_client_key);
-  socket_ = zmq::socket_t(context, zmq::socket_type::router);
-  socket_.set(zmq::sockopt::linger, 0);
-  socket_.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
+  sockets_->socket = zmq::socket_t(context, zmq::socket_type::router);
+  sockets_->socket.set(zmq::sockopt::linger, 0);
+  sockets_->socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
   if (security) {
-    socket_.set(zmq::sockopt::curve_server, 1);
-    socket_.set(zmq::sockopt::curve_secretkey, security->server.secret_key);
-    socket_.set(zmq::sockopt::zap_domain, "demfem");
+    sockets_->socket.set(zmq::sockopt::curve_server, 1);
+    sockets_->socket.set(zmq::sockopt::curve_secretkey, security->server.secret_key);
+    sockets_->socket.set(zmq::sockopt::zap_domain, "demfem");
   }
   try {
-    socket_.bind(endpoint);
+    sockets_->socket.bind(endpoint);
   } catch (const zmq::error_t& e) {
     throw std::runtime_error("cannot bind " + endpoint + ": " + e.what());
   }
-  endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
+  endpoint_ = sockets_->socket.get(zmq::sockopt::last_endpoint);
 }
 
 ServerSocket::~ServerSocket() {
-  socket_.close();  // before the ZAP handler goes
+  sockets_->socket.close();  // before the ZAP handler goes
 }
 
 std::optional<Incoming> ServerSocket::receive(std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+    zmq::pollitem_t item{sockets_->socket.handle(), 0, ZMQ_POLLIN, 0};
     if (left.count() <= 0 || zmq::poll(&item, 1, left) == 0) return std::nullopt;
     std::vector<zmq::message_t> frames;
-    if (!zmq::recv_multipart(socket_, std::back_inserter(frames)) || frames.size() < 2) continue;
+    if (!zmq::recv_multipart(sockets_->socket, std::back_inserter(frames)) || frames.size() < 2) continue;
     Incoming in;
     in.from.routing_id = frames[0].to_string();
     // A REQ peer puts an empty delimiter between the routing id and frame 0.
@@ -185,39 +205,41 @@ void ServerSocket::send(const PeerAddress& to, const Multipart& reply) {
   buffers.emplace_back(to.routing_id.data(), to.routing_id.size());
   if (to.delimited) buffers.emplace_back(nullptr, 0);
   for (const auto& f : reply) buffers.emplace_back(f.data(), f.size());
-  (void)zmq::send_multipart(socket_, buffers, zmq::send_flags::dontwait);
+  (void)zmq::send_multipart(sockets_->socket, buffers, zmq::send_flags::dontwait);
 }
 
-ClientSocket::ClientSocket(zmq::context_t& context, const std::string& endpoint, std::chrono::milliseconds timeout,
+ClientSocket::ClientSocket(Context& shared, const std::string& endpoint, std::chrono::milliseconds timeout,
                            const std::optional<ClientSecurity>& security)
-    : socket_(context, zmq::socket_type::req), endpoint_(endpoint), timeout_(timeout) {
-  socket_.set(zmq::sockopt::linger, 0);
-  socket_.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
-  socket_.set(zmq::sockopt::sndtimeo, static_cast<int>(timeout.count()));
+    : sockets_(std::make_unique<Sockets>()), endpoint_(endpoint), timeout_(timeout) {
+  zmq::context_t& context = shared.impl_->context;
+  sockets_->socket = zmq::socket_t(context, zmq::socket_type::req);
+  sockets_->socket.set(zmq::sockopt::linger, 0);
+  sockets_->socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
+  sockets_->socket.set(zmq::sockopt::sndtimeo, static_cast<int>(timeout.count()));
   if (security) {
-    socket_.set(zmq::sockopt::curve_serverkey, security->server_public_key);
-    socket_.set(zmq::sockopt::curve_publickey, security->client.public_key);
-    socket_.set(zmq::sockopt::curve_secretkey, security->client.secret_key);
+    sockets_->socket.set(zmq::sockopt::curve_serverkey, security->server_public_key);
+    sockets_->socket.set(zmq::sockopt::curve_publickey, security->client.public_key);
+    sockets_->socket.set(zmq::sockopt::curve_secretkey, security->client.secret_key);
   }
   const std::string monitor_endpoint = "inproc://demfem-client-monitor-" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
-  if (zmq_socket_monitor(socket_.handle(), monitor_endpoint.c_str(),
+  if (zmq_socket_monitor(sockets_->socket.handle(), monitor_endpoint.c_str(),
                          ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
                              ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_DISCONNECTED) != 0)
     throw std::runtime_error(std::string("zmq_socket_monitor failed: ") + zmq_strerror(zmq_errno()));
-  monitor_ = zmq::socket_t(context, zmq::socket_type::pair);
-  monitor_.set(zmq::sockopt::linger, 0);
-  monitor_.connect(monitor_endpoint);
+  sockets_->monitor = zmq::socket_t(context, zmq::socket_type::pair);
+  sockets_->monitor.set(zmq::sockopt::linger, 0);
+  sockets_->monitor.connect(monitor_endpoint);
   try {
-    socket_.connect(endpoint);
+    sockets_->socket.connect(endpoint);
   } catch (const zmq::error_t& e) {
     throw std::invalid_argument("cannot connect to '" + endpoint + "': " + e.what());
   }
 }
 
 ClientSocket::~ClientSocket() {
-  zmq_socket_monitor(socket_.handle(), nullptr, 0);
-  monitor_.close();
-  socket_.close();
+  zmq_socket_monitor(sockets_->socket.handle(), nullptr, 0);
+  sockets_->monitor.close();
+  sockets_->socket.close();
 }
 
 Multipart ClientSocket::request(const Multipart& request) {
@@ -226,7 +248,7 @@ Multipart ClientSocket::request(const Multipart& request) {
   std::vector<zmq::const_buffer> buffers;
   for (const auto& f : request) buffers.emplace_back(f.data(), f.size());
   const std::string seconds = std::to_string(static_cast<double>(timeout_.count()) / 1000.0);
-  if (!zmq::send_multipart(socket_, buffers)) {
+  if (!zmq::send_multipart(sockets_->socket, buffers)) {
     broken_ = true;
     throw ProtocolError(WireError::Timeout, "could not send to " + endpoint_ + " within " + seconds + " s");
   }
@@ -234,7 +256,7 @@ Multipart ClientSocket::request(const Multipart& request) {
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) break;
-    zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::pollitem_t items[2] = {{sockets_->socket.handle(), 0, ZMQ_POLLIN, 0}, {sockets_->monitor.handle(), 0, ZMQ_POLLIN, 0}};
     try {
       zmq::poll(items, 2, left);
     } catch (const zmq::error_t& e) {
@@ -243,7 +265,7 @@ Multipart ClientSocket::request(const Multipart& request) {
     }
     if (items[1].revents & ZMQ_POLLIN) {
       std::vector<zmq::message_t> event;
-      (void)zmq::recv_multipart(monitor_, std::back_inserter(event));
+      (void)zmq::recv_multipart(sockets_->monitor, std::back_inserter(event));
       broken_ = true;
       // Frame 0 of a monitor event: u16 event id, u32 value.
       std::uint16_t id = 0;
@@ -258,7 +280,7 @@ Multipart ClientSocket::request(const Multipart& request) {
     }
     if (items[0].revents & ZMQ_POLLIN) {
       std::vector<zmq::message_t> frames;
-      (void)zmq::recv_multipart(socket_, std::back_inserter(frames));
+      (void)zmq::recv_multipart(sockets_->socket, std::back_inserter(frames));
       Multipart reply;
       for (auto& f : frames) reply.emplace_back(static_cast<const char*>(f.data()), f.size());
       return reply;

@@ -2,6 +2,7 @@
 // loader (file -> value) and the serializer (value -> file) so the two cannot disagree.
 #pragma once
 
+#include "demfem/study/contact_laws.hpp"
 #include "demfem/study/study.hpp"
 
 #include <stdexcept>
@@ -19,17 +20,19 @@ inline const NameTable<StudyKind> kStudyKinds{{"coupled", StudyKind::Coupled},
                                               {"weight-drop", StudyKind::WeightDrop},
                                               {"cone-penetration", StudyKind::ConePenetration},
                                               {"fem-only", StudyKind::FemOnly}};
-inline const NameTable<NormalModel> kNormalModels{{"edem-hysteretic", NormalModel::EdemHysteretic},
-                                                  {"hooke", NormalModel::Hooke},
-                                                  {"hooke-hysteresis", NormalModel::HookeHysteresis}};
-inline const NameTable<CohesionModel> kCohesionModels{{"none", CohesionModel::None},
-                                                      {"edem-linear", CohesionModel::EdemLinear},
-                                                      {"sjkr", CohesionModel::Sjkr},
-                                                      {"sjkr2", CohesionModel::Sjkr2}};
-inline const NameTable<RollingModel> kRollingModels{{"none", RollingModel::None},
-                                                    {"edem-standard", RollingModel::EdemStandard},
-                                                    {"cdt", RollingModel::Cdt},
-                                                    {"epsd", RollingModel::Epsd}};
+// The contact laws' spellings come from their traits (contact_laws.hpp).
+template <class E, std::size_t N, class With>
+NameTable<E> lawNames(const E (&all)[N], With with) {
+  NameTable<E> table;
+  for (E value : all) table.emplace_back(std::string(with(value, [](auto law) { return decltype(law)::name; })), value);
+  return table;
+}
+inline const NameTable<NormalModel> kNormalModels =
+    lawNames(kAllNormalModels, [](NormalModel m, auto f) { return withNormalLaw(m, f); });
+inline const NameTable<CohesionModel> kCohesionModels =
+    lawNames(kAllCohesionModels, [](CohesionModel m, auto f) { return withCohesionLaw(m, f); });
+inline const NameTable<RollingModel> kRollingModels =
+    lawNames(kAllRollingModels, [](RollingModel m, auto f) { return withRollingLaw(m, f); });
 inline const NameTable<DepositionBackend> kDepositionBackends{{"builtin", DepositionBackend::Builtin},
                                                               {"liggghts", DepositionBackend::Liggghts}};
 inline const NameTable<GeometryKind> kGeometryKinds{{"plate", GeometryKind::Plate},

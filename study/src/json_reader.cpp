@@ -327,6 +327,8 @@ const nlohmann::json* ObjectReader::array(std::string_view key, Need need, std::
   return v;
 }
 
+const nlohmann::json* ObjectReader::raw(std::string_view key) { return member(key, Need::Optional, ""); }
+
 void ObjectReader::forbid(std::string_view key, const std::string& reason) {
   seen_.insert(std::string(key));
   if (has(key)) issues_.add(pathOf(key), "does not apply: " + reason + "; remove it");

@@ -69,6 +69,7 @@ class ObjectReader {
   ObjectReader(const nlohmann::json* value, std::string path, IssueList& issues);
 
   bool valid() const { return value_ != nullptr; }
+  const nlohmann::json* value() const { return value_; }
   const std::string& path() const { return path_; }
   std::string pathOf(std::string_view key) const { return path_ + "/" + pointerToken(key); }
   bool has(std::string_view key) const;
@@ -88,6 +89,10 @@ class ObjectReader {
   // A nested array of at least `min_size` elements; nullptr if missing or invalid.
   const nlohmann::json* array(std::string_view key, Need need, std::size_t min_size = 0);
 
+  // The member `key` as it is (marked as read), nullptr if absent; for values of their own shape.
+  const nlohmann::json* raw(std::string_view key);
+  // A problem with the member `key`.
+  void report(std::string_view key, std::string message) { issues_.add(pathOf(key), std::move(message)); }
   // Marks `key` as recognised without reading it.
   void known(std::string_view key) { seen_.insert(std::string(key)); }
   // `key` must not appear: it does not apply (`reason` says why, e.g. "the tool of a dem-only

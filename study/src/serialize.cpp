@@ -3,6 +3,7 @@
 
 #include "enum_names.hpp"
 #include "json_reader.hpp"
+#include "schema.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -17,160 +18,64 @@ namespace demfem::study {
 
 namespace {
 
+using detail::KeyContext;
 using detail::nameOf;
+using detail::writeKeys;
 using nlohmann::ordered_json;
 
-// SI value -> the unit of `key`, rounded to 12 significant digits so that 0.018 m prints as 18 mm
-// rather than 18.000000000000004 (conversion noise only; study values carry far fewer digits).
-double fileValue(const char* key, double si) {
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.12g", si / detail::siFactorOf(key));
-  return std::strtod(buffer, nullptr);
+// What decides which keys a study's file form has.
+KeyContext contextOf(const Study& study) {
+  KeyContext context;
+  context.kind = study.kind;
+  context.normal = study.soil.contact.normal;
+  context.cohesion = study.soil.contact.cohesion;
+  context.rolling = study.soil.contact.rolling;
+  context.explicit_dem_step = study.dem.dt_s.has_value();
+  return context;
 }
 
-// Appends `key: value` in the key's file unit.
-void put(ordered_json& object, const char* key, double si) { object[key] = fileValue(key, si); }
-
-ordered_json soilJson(const Soil& soil) {
-  ordered_json out;
-  ordered_json& bin = out["bin"];
-  put(bin, "length_mm", soil.bin_length_m);
-  put(bin, "width_mm", soil.bin_width_m);
-  bin["material"] = soil.bin_material;
-  put(out, "fill_height_mm", soil.fill_height_m);
-  put(out["particles"], "diameter_min_mm", soil.diameter_min_m);
-  put(out["particles"], "diameter_max_mm", soil.diameter_max_m);
-  out["materials"] = ordered_json::array();
-  for (const DemMaterial& m : soil.materials) {
-    ordered_json entry;
-    entry["name"] = m.name;
-    put(entry, "density_kg_m3", m.density_kg_m3);
-    put(entry, "E_Pa", m.youngs_Pa);
-    put(entry, "nu", m.poisson);
-    put(entry, "yield_Pa", m.yield_Pa);
-    out["materials"].push_back(entry);
-  }
-  const ContactModel& c = soil.contact;
-  ordered_json& contact = out["contact"];
-  contact["normal"] = nameOf(detail::kNormalModels, c.normal);
-  contact["cohesion"] = nameOf(detail::kCohesionModels, c.cohesion);
-  contact["rolling"] = nameOf(detail::kRollingModels, c.rolling);
-  contact["tangential_history"] = c.tangential_history;
-  if (c.normal == NormalModel::EdemHysteretic) {
-    put(contact, "stiffness_factor", c.stiffness_factor);
-    put(contact, "damping_factor", c.damping_factor);
-  } else {
-    put(contact, "characteristic_velocity_m_s", c.characteristic_velocity_m_s);
-  }
-  if (c.normal == NormalModel::HookeHysteresis) {
-    put(contact, "coefficient_max_elastic_stiffness", c.coefficient_max_elastic_stiffness);
-    put(contact, "coefficient_plasticity_depth", c.coefficient_plasticity_depth);
-    put(contact, "coefficient_adhesion_stiffness", c.coefficient_adhesion_stiffness);
-  }
-  out["layers"] = ordered_json::array();
-  for (const Layer& l : soil.layers) {
-    ordered_json entry;
-    entry["material"] = l.material;
-    put(entry, "top_depth_mm", l.top_depth_m);
-    put(entry, "bottom_depth_mm", l.bottom_depth_m);
-    out["layers"].push_back(entry);
-  }
-  out["interactions"] = ordered_json::array();
-  for (const Interaction& i : soil.interactions) {
-    ordered_json entry;
-    entry["materials"] = {i.a, i.b};
-    put(entry, "restitution", i.restitution);
-    put(entry, "static_friction", i.static_friction);
-    if (c.rolling != RollingModel::None) put(entry, "rolling_friction", i.rolling_friction);
-    if (c.cohesion != CohesionModel::None) put(entry, "cohesion_J_m3", i.cohesion_J_m3);
-    out["interactions"].push_back(entry);
-  }
-  out["deposition"]["seed"] = soil.deposition_seed;
-  put(out["deposition"], "settle_kinetic_energy_J", soil.settle_kinetic_energy_J);
-  out["deposition"]["backend"] = nameOf(detail::kDepositionBackends, soil.deposition_backend);
-  return out;
-}
-
-ordered_json toolJson(const Tool& tool, StudyKind kind) {
-  ordered_json out;
-  out["name"] = tool.name;
-  if (hasSoil(kind)) out["dem_material"] = tool.dem_material;
-  const ToolGeometry& g = tool.geometry;
-  ordered_json& geometry = out["geometry"];
-  geometry["kind"] = nameOf(detail::kGeometryKinds, g.kind);
-  switch (g.kind) {
-    case GeometryKind::Plate:
-      put(geometry, "length_mm", g.length_m);
-      put(geometry, "width_mm", g.width_m);
-      put(geometry, "thickness_mm", g.thickness_m);
-      put(geometry, "keypoint_spacing_mm", g.keypoint_spacing_m);
-      break;
-    case GeometryKind::Gmsh:
-      put(geometry, "length_mm", g.length_m);
-      geometry["mesh_file"] = g.mesh_file.string();
-      break;
-    case GeometryKind::MatrixMarket:
-      put(geometry, "length_mm", g.length_m);
-      geometry["mass_file"] = g.mass_file.string();
-      geometry["stiffness_file"] = g.stiffness_file.string();
-      geometry["keypoint_file"] = g.keypoint_file.string();
-      break;
-    case GeometryKind::Cone:
-      put(geometry, "length_mm", g.length_m);
-      put(geometry, "area_mm2", g.cone_area_m2);
-      put(geometry, "apex_angle_deg", g.cone_angle_rad);
-      put(geometry, "keypoint_spacing_mm", g.keypoint_spacing_m);
-      break;
-  }
-  if (tool.fem.deformable || kind == StudyKind::DemOnly) {
-    ordered_json& fem = out["fem"];
-    if (g.kind != GeometryKind::MatrixMarket) {
-      put(fem, "E_Pa", tool.fem.youngs_Pa);
-      put(fem, "nu", tool.fem.poisson);
-      put(fem, "density_kg_m3", tool.fem.density_kg_m3);
-      fem["element_order"] = nameOf(detail::kElementOrders, tool.fem.element_order);
-    }
-    if (tool.fem.deformable) {
-      put(fem, "alpha_s", tool.fem.alpha_s);
-      put(fem, "beta_per_s", tool.fem.beta_per_s);
-    }
-  }
-  if (g.kind != GeometryKind::Cone) {
-    ordered_json& c = out["constraints"];
-    put(c, "clamp_length_mm", tool.constraints.clamp_length_m);
-    put(c, "load_cell_from_top_mm", tool.constraints.load_cell_from_top_m);
-    put(c, "sensor_from_top_mm", tool.constraints.sensor_from_top_m);
-    if (tool.constraints.clamp_rotational_stiffness_Nm_per_rad)
-      put(c, "clamp_rotational_stiffness_Nm_per_rad", *tool.constraints.clamp_rotational_stiffness_Nm_per_rad);
-  }
-  if (tool.fem.deformable) {
-    ordered_json& s = out["sensors"];
-    put(s, "force_gain", tool.sensors.force_gain);
-    put(s, "deformation_gain", tool.sensors.deformation_gain);
-  }
-  if (hasSoil(kind)) {
-    ordered_json& m = out["motion"];
-    put(m, "depth_mm", tool.motion.depth_m);
-    put(m, "velocity_mm_s", tool.motion.velocity_m_s);
-    if (g.kind != GeometryKind::Cone) put(m, "stroke_mm", tool.motion.stroke_m);
-    put(m, "start_z_mm", tool.motion.start_z_m);
-    put(m, "center_x_mm", tool.motion.center_x_m);
-    if (g.kind != GeometryKind::Cone) put(m, "insertion_velocity_mm_s", tool.motion.insertion_velocity_m_s);
+template <class T>
+ordered_json entriesJson(const std::vector<T>& entries, const detail::Section<T>& section, const KeyContext& context) {
+  ordered_json out = ordered_json::array();
+  for (const T& entry : entries) {
+    ordered_json object = ordered_json::object();
+    writeKeys(object, section, entry, context);
+    out.push_back(object);
   }
   return out;
 }
 
-ordered_json demJson(const DemSettings& dem) {
+ordered_json soilJson(const Soil& soil, const KeyContext& context) {
   ordered_json out;
-  out["backend"] = dem.backend;
-  if (dem.dt_s) {
-    put(out, "dt_s", *dem.dt_s);
-  } else {
-    out["criterion"] = nameOf(detail::kCriteria, dem.criterion);
-    put(out, "dt_fraction", dem.dt_fraction);
-  }
-  out["threads"] = dem.threads;
-  out["seed"] = dem.seed;
+  writeKeys(out["bin"], detail::binSection(), soil, context);
+  writeKeys(out, detail::soilSection(), soil, context);
+  writeKeys(out["particles"], detail::particlesSection(), soil, context);
+  out["materials"] = entriesJson(soil.materials, detail::materialSection(), context);
+  writeKeys(out["contact"], detail::contactSection(), soil.contact, context);
+  out["layers"] = entriesJson(soil.layers, detail::layerSection(), context);
+  out["interactions"] = entriesJson(soil.interactions, detail::interactionSection(), context);
+  writeKeys(out["deposition"], detail::depositionSection(), soil, context);
+  return out;
+}
+
+ordered_json toolJson(const Tool& tool, KeyContext context) {
+  context.geometry = tool.geometry.kind;
+  context.deformable = tool.fem.deformable;
+  ordered_json out;
+  writeKeys(out, detail::toolSection(), tool, context);
+  writeKeys(out["geometry"], detail::geometrySection(), tool.geometry, context);
+  if (tool.fem.deformable || context.kind == StudyKind::DemOnly)
+    writeKeys(out["fem"], detail::toolFemSection(), tool.fem, context);
+  if (tool.geometry.kind != GeometryKind::Cone)
+    writeKeys(out["constraints"], detail::constraintsSection(), tool.constraints, context);
+  if (tool.fem.deformable) writeKeys(out["sensors"], detail::sensorsSection(), tool.sensors, context);
+  if (hasSoil(context.kind)) writeKeys(out["motion"], detail::motionSection(), tool.motion, context);
+  return out;
+}
+
+ordered_json demJson(const Study& study) {
+  ordered_json out;
+  writeKeys(out, detail::demSection(), study.dem, contextOf(study));
   return out;
 }
 
@@ -208,32 +113,19 @@ std::uint64_t fnv1a64(std::string_view bytes) {
 }
 
 ordered_json toJson(const Study& study) {
+  const KeyContext context = contextOf(study);
   ordered_json out;
-  out["name"] = study.name;
-  out["kind"] = nameOf(detail::kStudyKinds, study.kind);
-  if (!study.notes.empty()) out["notes"] = study.notes;
-  if (hasSoil(study.kind)) out["soil"] = soilJson(study.soil);
+  writeKeys(out, detail::topSection(), study, context);
+  if (hasSoil(study.kind)) out["soil"] = soilJson(study.soil, context);
   out["tools"] = ordered_json::array();
-  for (const Tool& tool : study.tools) out["tools"].push_back(toolJson(tool, study.kind));
-  if (study.weight_drop) {
-    ordered_json& w = out["weight_drop"];
-    put(w, "mass_kg", study.weight_drop->mass_kg);
-    put(w, "pan_rows_from_tip_mm", study.weight_drop->pan_rows_from_tip_m);
-    put(w, "duration_s", study.weight_drop->duration_s);
-  }
-  put(out["fem"], "dt_s", study.fem.dt_s);
+  for (const Tool& tool : study.tools) out["tools"].push_back(toolJson(tool, context));
+  if (study.weight_drop) writeKeys(out["weight_drop"], detail::weightDropSection(), *study.weight_drop, context);
+  writeKeys(out["fem"], detail::femSection(), study.fem, context);
   if (hasSoil(study.kind)) {
-    out["dem"] = demJson(study.dem);
-    ordered_json& c = out["coupling"];
-    if (!study.coupling.endpoint.empty()) c["endpoint"] = study.coupling.endpoint;
-    c["force_averaging"] = nameOf(detail::kForceAveraging, study.coupling.force_averaging);
-    put(c, "timeout_s", study.coupling.timeout_s);
-    put(c, "max_simulate_s", study.coupling.max_simulate_s);
+    out["dem"] = demJson(study);
+    writeKeys(out["coupling"], detail::couplingSection(), study.coupling, context);
   }
-  ordered_json& o = out["output"];
-  o["directory"] = study.output.directory.string();
-  o["vtk_every"] = study.output.vtk_every;
-  o["csv_every"] = study.output.csv_every;
+  writeKeys(out["output"], detail::outputSection(), study.output, context);
   return out;
 }
 
@@ -253,7 +145,7 @@ std::string soilHash(const Study& study) {
   std::set<std::string> used{soil.bin_material};
   for (const Layer& l : soil.layers) used.insert(l.material);
   nlohmann::json canonical;  // std::map objects: keys sorted
-  canonical["soil"] = nlohmann::json::parse(soilJson(soil).dump());
+  canonical["soil"] = nlohmann::json::parse(soilJson(soil, contextOf(study)).dump());
   nlohmann::json& materials = canonical["soil"]["materials"];
   nlohmann::json soil_materials = nlohmann::json::array();
   for (const auto& m : materials)
@@ -272,7 +164,7 @@ std::string soilHash(const Study& study) {
   }
   std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) { return a["materials"] < b["materials"]; });
   interactions = kept;
-  nlohmann::json dem = nlohmann::json::parse(demJson(study.dem).dump());
+  nlohmann::json dem = nlohmann::json::parse(demJson(study).dump());
   dem.erase("seed");     // the run's seed; the deposition has soil.deposition.seed
   dem.erase("threads");  // one soil for every core count
   dem.erase("backend");  // the run's backend; the deposition's is soil.deposition.backend

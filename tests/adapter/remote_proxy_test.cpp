@@ -22,7 +22,7 @@ ServerOptions idle(std::chrono::milliseconds timeout) {
 
 // A server on its own thread until shutdown or 10 s idle.
 struct ServedBackend {
-  explicit ServedBackend(zmq::context_t& context, const std::string& endpoint)
+  explicit ServedBackend(demfem::protocol::Context& context, const std::string& endpoint)
       : api(harmonic()), socket(context, endpoint), server(*api, idle(10s)) {
     thread = std::thread([this] {
       try {
@@ -67,7 +67,7 @@ std::vector<double> exercise(CouplingApi& api) {
 TEST_CASE("the remote proxy is indistinguishable from the local backend (bit-identical results)", "[adapter]") {
   auto local = harmonic();
   const auto expected = exercise(*local);
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   for (const std::string endpoint : {"inproc://proxy-test", "tcp://127.0.0.1:*"}) {
     ServedBackend served(context, endpoint);
     RemoteProxy proxy({served.socket.endpoint(), 5s, std::nullopt, "test"}, &context);
@@ -80,7 +80,7 @@ TEST_CASE("the remote proxy is indistinguishable from the local backend (bit-ide
 }
 
 TEST_CASE("the remote proxy rethrows server errors with their codes", "[adapter]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   ServedBackend served(context, "inproc://proxy-errors");
   RemoteProxy proxy({served.socket.endpoint(), 5s, std::nullopt, "test"}, &context);
   try {
@@ -96,7 +96,7 @@ TEST_CASE("the remote proxy rethrows server errors with their codes", "[adapter]
 }
 
 TEST_CASE("the remote proxy refuses a server of another protocol version", "[adapter]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   p::ServerSocket socket(context, "inproc://future-server");
   std::thread server([&] {
     auto request = socket.receive(5s);
@@ -114,7 +114,7 @@ TEST_CASE("the remote proxy refuses a server of another protocol version", "[ada
 }
 
 TEST_CASE("the remote proxy times out with a clear message when no server answers", "[adapter]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   p::ServerSocket silent(context, "tcp://127.0.0.1:*");
   try {
     RemoteProxy proxy({silent.endpoint(), 300ms, std::nullopt, "test"}, &context);
@@ -126,7 +126,7 @@ TEST_CASE("the remote proxy times out with a clear message when no server answer
 }
 
 TEST_CASE("a served backend whose client vanished gives up after the idle timeout", "[adapter]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   auto api = harmonic();
   p::ServerSocket socket(context, "inproc://abandoned");
   Server server(*api, idle(100ms));
@@ -136,7 +136,7 @@ TEST_CASE("a served backend whose client vanished gives up after the idle timeou
 
 TEST_CASE("a second client is told the server is busy, the first keeps its session, and a crashed client can come back",
           "[adapter]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   auto api = harmonic();
   p::ServerSocket socket(context, "tcp://127.0.0.1:*");
   Server server(*api, idle(300ms));

@@ -137,7 +137,7 @@ TEST_CASE("a coupled run of demfem-fem against demfem-dem on LIGGGHTS completes 
       remote.client_name = "liggghts coupled-run test relay";
       adapter::RemoteProxy proxy(remote);
       relay = std::make_unique<RecordingRelay>(proxy);
-      zmq::context_t context(1);
+      protocol::Context context;
       protocol::ServerSocket socket(context, "tcp://127.0.0.1:*");
       relay_endpoint.set_value(socket.endpoint());
       adapter::ServerOptions options;

@@ -38,7 +38,7 @@ TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]"
   const fs::path dir = freshDir("ipc");
   for (const std::string& endpoint : {std::string("inproc://transport-test"), "ipc://" + (dir / "s").string(),
                                      std::string("tcp://127.0.0.1:*")}) {
-    zmq::context_t context(1);
+    demfem::protocol::Context context;
     ServerSocket server(context, endpoint);
     auto thread = echo(server, 1);
     ClientSocket client(context, server.endpoint(), 5s);
@@ -50,7 +50,7 @@ TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]"
 }
 
 TEST_CASE("a client whose server never answers times out with a message saying the peer is gone", "[protocol]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   ServerSocket silent(context, "tcp://127.0.0.1:*");
   ClientSocket client(context, silent.endpoint(), 300ms);
   const auto start = std::chrono::steady_clock::now();
@@ -67,7 +67,7 @@ TEST_CASE("a client whose server never answers times out with a message saying t
 }
 
 TEST_CASE("a server that goes away while a request is pending fails it at once, not after the timeout", "[protocol]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   auto server = std::make_unique<ServerSocket>(context, "tcp://127.0.0.1:*");
   ClientSocket client(context, server->endpoint(), 20s);
   std::thread closer([&] {
@@ -86,7 +86,7 @@ TEST_CASE("a server that goes away while a request is pending fails it at once, 
 }
 
 TEST_CASE("a server receive returns nothing after its timeout", "[protocol]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   ServerSocket server(context, "inproc://idle");
   CHECK_FALSE(server.receive(50ms).has_value());
 }
@@ -95,7 +95,7 @@ TEST_CASE("binding ipc never deletes a file that is not a socket", "[protocol]")
   const fs::path dir = freshDir("ipc-file");
   const fs::path precious = dir / "precious.txt";
   { std::ofstream(precious) << "keep me\n"; }
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   CHECK_THROWS_WITH(ServerSocket(context, "ipc://" + precious.string()), Catch::Contains("not a socket"));
   CHECK(fs::file_size(precious) == 8);
   {  // a socket left by an earlier server may be replaced
@@ -107,7 +107,7 @@ TEST_CASE("binding ipc never deletes a file that is not a socket", "[protocol]")
 }
 
 TEST_CASE("each reply goes back to the connection its request came on", "[protocol]") {
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   ServerSocket server(context, "inproc://routing");
   ClientSocket a(context, "inproc://routing", 5s), b(context, "inproc://routing", 5s);
   std::thread thread([&] {
@@ -139,7 +139,7 @@ TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is re
   writeCurveKeyDirectory(keys);
   writeCurveKeyDirectory(other);
   CHECK((fs::status(keys / "client.secret").permissions() & fs::perms::others_read) == fs::perms::none);
-  zmq::context_t context(1);
+  demfem::protocol::Context context;
   ServerSocket server(context, "tcp://127.0.0.1:*", loadServerSecurity(keys));
   auto thread = echo(server, 1);
   {

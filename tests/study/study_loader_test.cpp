@@ -1,6 +1,9 @@
 // Study-file loader: every kind of problem is reported with its JSON path, all at once; units are
 // converted once; cross-field rules hold. Mutations start from studies/quick.json.
+#include "demfem/study/backend_capabilities.hpp"
 #include "demfem/study/study.hpp"
+
+#include "source_files.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -20,15 +23,8 @@ using nlohmann::json;
 
 namespace {
 
-const std::filesystem::path kSource = DEMFEM_SOURCE_DIR;
-
-std::string readText(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  REQUIRE(in);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using demfem::study::testing::kSource;
+using demfem::study::testing::readText;
 
 json quick() { return json::parse(readText(kSource / "studies/quick.json")); }
 json paper(const char* name) { return json::parse(readText(kSource / "studies" / name)); }
@@ -283,9 +279,36 @@ TEST_CASE("sections and keys follow the study kind and the chosen models", "[stu
   REQUIRE(dt.size() == 2);
   CHECK(dt[0].path == "/dem/criterion");
   CHECK(dt[1].path == "/dem/dt_fraction");
-  doc = quick();
-  doc["dem"]["backend"] = "liggghts";  // EDEM contact laws are not in LIGGGHTS
-  CHECK(issuesOf(doc).size() == 3);
+}
+
+TEST_CASE("a backend that lacks the study's contact laws is named with each law, also when it only deposits", "[study]") {
+  using demfem::study::BackendCapabilities;
+  using namespace demfem::study;
+  const BackendCapabilities all{"full", true, {NormalModel::EdemHysteretic, NormalModel::Hooke},
+                                {CohesionModel::None, CohesionModel::EdemLinear}, {RollingModel::EdemStandard}, {}, true};
+  const BackendCapabilities hooke{"hooke-only", true, {NormalModel::Hooke}, {CohesionModel::None, CohesionModel::Sjkr},
+                                  {RollingModel::Cdt}, {}, false};
+  // quick.json: edem-hysteretic, edem-linear, edem-standard; deposited by "builtin".
+  Study s = parseStudy(quick().dump(), "quick.json");
+  s.dem.backend = "full";
+  const std::vector<Issue> unknown = backendIssues(s, {all, hooke});
+  REQUIRE(unknown.size() == 1);  // the deposition backend is not in this registry
+  CHECK(unknown[0].path == "/soil/deposition/backend");
+  BackendCapabilities builtin = all;
+  builtin.name = "builtin";
+  s.dem.backend = "builtin";
+  CHECK(backendIssues(s, {builtin, hooke}).empty());
+  s.dem.backend = "hooke-only";
+  const std::vector<Issue> laws = backendIssues(s, {builtin, hooke});
+  REQUIRE(laws.size() == 3);
+  CHECK(laws[0].path == "/soil/contact/normal");
+  CHECK(laws[0].message == "\"edem-hysteretic\" is not available in the hooke-only backend; use \"hooke\"");
+  CHECK(laws[1].message == "\"edem-linear\" is not available in the hooke-only backend; use \"sjkr\"");
+  s.dem.backend = "nowhere";
+  const std::vector<Issue> missing = backendIssues(s, {builtin, hooke});
+  REQUIRE(missing.size() == 1);
+  CHECK(missing[0].path == "/dem/backend");
+  CHECK(missing[0].message == "unknown backend \"nowhere\" (this build offers builtin, hooke-only)");
 }
 
 TEST_CASE("the effective study round-trips through its file form", "[study]") {

@@ -1,5 +1,6 @@
 #include "demfem/cli/cli_support.hpp"
 
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/study/study.hpp"
 
 #include <filesystem>
@@ -49,15 +50,7 @@ void writeJson(const std::string& target, const nlohmann::json& doc) {
     std::cout << doc.dump(2) << '\n';
     return;
   }
-  const std::filesystem::path path(target);
-  const std::filesystem::path tmp = path.string() + ".partial";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write JSON to " + target);
-    out << doc.dump(2) << '\n';
-    if (!out) throw std::runtime_error("writing JSON to " + target + " failed");
-  }
-  std::filesystem::rename(tmp, path);
+  adapter::writeFileAtomically(target, doc.dump(2) + "\n");
 }
 
 }  // namespace demfem::cli

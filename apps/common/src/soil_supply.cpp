@@ -1,6 +1,5 @@
 #include "demfem/cli/soil_supply.hpp"
 
-#include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
@@ -62,29 +61,11 @@ void provideSoil(const study::Study& study, const std::string& backend) {
   adapter::writeSettledSoil(file, depositWith(study.soil.deposition_backend, study, study.dem.threads, cost, false));
 }
 
-std::unique_ptr<adapter::CouplingApi> makeSoilBackend(const std::string& backend, const study::Study& study) {
-  if (backend == "builtin") {
-    Progress deposition("deposition", true);  // reports only when the backend deposits
-    auto api = builtin::makeBackend(study, [&deposition](double fraction, const std::string& stage_line) {
-      if (!stage_line.empty()) std::cerr << "deposition: " << stage_line << std::endl;
-      deposition.update(fraction);
-    });
-    deposition.finish();
-    return api;
-  }
-#if DEMFEM_WITH_LIGGGHTS
-  if (backend == "liggghts") return liggghts::makeBackend(study);
-#else
-  if (backend == "liggghts") throw InputError("built without LIGGGHTS (DEMFEM_WITH_LIGGGHTS=OFF)");
-#endif
-  throw InputError("unknown soil backend '" + backend + "' (builtin, liggghts)");
-}
-
 }  // namespace
 
-std::unique_ptr<adapter::CouplingApi> openSoilBackend(const std::string& backend, const study::Study& study, bool allow_unsettled) {
-  provideSoil(study, backend);
-  auto api = makeSoilBackend(backend, study);
+std::unique_ptr<adapter::CouplingApi> openSoilBackend(const BackendEntry& backend, const study::Study& study, bool allow_unsettled) {
+  provideSoil(study, backend.capabilities.name);
+  auto api = backend.make(study, adapter::TestLoad{});
   const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
   requireSettled(adapter::readSettledSoil(file, study), file, allow_unsettled);
   return api;

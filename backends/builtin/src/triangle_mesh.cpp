@@ -1,5 +1,7 @@
 #include "demfem/backends/builtin/triangle_mesh.hpp"
 
+#include "demfem/backends/physics/dem_formulas.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -18,49 +20,28 @@ std::int64_t edgeKey(std::int32_t a, std::int32_t b) {
 }
 std::int64_t vertexKey(std::int32_t node) { return static_cast<std::int64_t>(node) * 4 + 2; }
 
-namespace {
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-ClosestFeature vertexHit(const Vec3& v, std::int32_t node, int slot) {
-  ClosestFeature f{v, {0, 0, 0}, FeatureKind::Vertex, vertexKey(node)};
-  f.weights[slot] = 1;
-  return f;
-}
-ClosestFeature edgeHit(const Vec3& u, const Vec3& w, double t, std::int32_t nu, std::int32_t nw, int su, int sw) {
-  ClosestFeature f{{u[0] + t * (w[0] - u[0]), u[1] + t * (w[1] - u[1]), u[2] + t * (w[2] - u[2])},
-                   {0, 0, 0}, FeatureKind::Edge, edgeKey(nu, nw)};
-  f.weights[su] = 1 - t;
-  f.weights[sw] = t;
-  return f;
-}
-}  // namespace
-
-// Closest point on a triangle by Voronoi regions (Ericson, Real-Time Collision Detection, 5.1.5),
-// with the region reported as the feature. A point exactly on a shared edge is an edge hit from both
-// triangles (same key), never a face hit of both.
+// Closest point on a triangle by Voronoi regions, with the region reported as the feature (the
+// shared DEM formulas: docs/architecture.md section 11). A point exactly on a shared edge is an edge
+// hit from both triangles (same key), never a face hit of both.
 ClosestFeature closestFeature(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
                               const std::array<std::int32_t, 3>& ids, std::int32_t tri) {
-  const Vec3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return vertexHit(a, ids[0], 0);
-  const Vec3 bp = sub(p, b);
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return vertexHit(b, ids[1], 1);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return edgeHit(a, b, d1 / (d1 - d3), ids[0], ids[1], 0, 1);
-  const Vec3 cp = sub(p, c);
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return vertexHit(c, ids[2], 2);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return edgeHit(a, c, d2 / (d2 - d6), ids[0], ids[2], 0, 2);
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return edgeHit(b, c, (d4 - d3) / ((d4 - d3) + (d5 - d6)), ids[1], ids[2], 1, 2);
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  return {{a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w},
-          {1 - v - w, v, w}, FeatureKind::Face, faceKey(tri)};
+  using physics::TriangleRegion;
+  const physics::TrianglePoint q = physics::closestOnTriangle(p, a, b, c);
+  const auto along = [&](const Vec3& u, const Vec3& w) {
+    return Vec3{u[0] + q.t * (w[0] - u[0]), u[1] + q.t * (w[1] - u[1]), u[2] + q.t * (w[2] - u[2])};
+  };
+  switch (q.region) {
+    case TriangleRegion::A: return {a, q.weights, FeatureKind::Vertex, vertexKey(ids[0])};
+    case TriangleRegion::B: return {b, q.weights, FeatureKind::Vertex, vertexKey(ids[1])};
+    case TriangleRegion::C: return {c, q.weights, FeatureKind::Vertex, vertexKey(ids[2])};
+    case TriangleRegion::AB: return {along(a, b), q.weights, FeatureKind::Edge, edgeKey(ids[0], ids[1])};
+    case TriangleRegion::AC: return {along(a, c), q.weights, FeatureKind::Edge, edgeKey(ids[0], ids[2])};
+    case TriangleRegion::BC: return {along(b, c), q.weights, FeatureKind::Edge, edgeKey(ids[1], ids[2])};
+    case TriangleRegion::Face: break;
+  }
+  const Vec3 ab{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ac{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  return {{a[0] + ab[0] * q.v + ac[0] * q.w, a[1] + ab[1] * q.v + ac[1] * q.w, a[2] + ab[2] * q.v + ac[2] * q.w},
+          q.weights, FeatureKind::Face, faceKey(tri)};
 }
 
 namespace {

@@ -4,6 +4,7 @@
 
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/liggghts/input_deck.hpp"
+#include "demfem/backends/physics/dem_formulas.hpp"
 
 #include <mpi.h>
 
@@ -89,40 +90,6 @@ class NodeArrayAccess : public LAMMPS_NS::MeshMover {
   void initial_integrate(double, double, double) override {}
   double*** nodes() { return get_nodes(); }
 };
-
-// Barycentric weights of the point of triangle (a, b, c) closest to p (Ericson, Real-Time Collision
-// Detection, 5.1.5): the contact point of a sphere centred at p touching the triangle.
-Vec3 closestPointWeights(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto sub = [](const Vec3& u, const Vec3& v) { return Vec3{u[0] - v[0], u[1] - v[1], u[2] - v[2]}; };
-  auto dot = [](const Vec3& u, const Vec3& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
-  const Vec3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
-  const Vec3 bp = sub(p, b);
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    return {1 - v, v, 0};
-  }
-  const Vec3 cp = sub(p, c);
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    return {1 - w, 0, w};
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return {0, 1 - w, w};
-  }
-  const double denom = 1 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  return {1 - v - w, v, w};
-}
 
 // Redirects the process's stderr (file descriptor 2) into a file for its lifetime.
 class StderrToFile {
@@ -734,9 +701,11 @@ class Engine {
           const double* stored = contacts->contacthistory(i, p);  // force on the particle, delta, v
           const auto& nodes = tool.surface.triangles[static_cast<std::size_t>(tri)];
           const Vec3 centre{x[i][0] - offset[0], x[i][1] - offset[1], x[i][2] - offset[2]};
-          const Vec3 w = closestPointWeights(centre, keypoint(tool, static_cast<std::size_t>(nodes[0])),
-                                             keypoint(tool, static_cast<std::size_t>(nodes[1])),
-                                             keypoint(tool, static_cast<std::size_t>(nodes[2])));
+          // The contact point: the triangle's point closest to the centre (docs/architecture.md section 11).
+          const Vec3 w = physics::closestOnTriangle(centre, keypoint(tool, static_cast<std::size_t>(nodes[0])),
+                                                    keypoint(tool, static_cast<std::size_t>(nodes[1])),
+                                                    keypoint(tool, static_cast<std::size_t>(nodes[2])))
+                             .weights;
           for (int a = 0; a < 3; ++a) {
             const auto k = 3 * static_cast<std::size_t>(nodes[static_cast<std::size_t>(a)]);
             for (int c = 0; c < 3; ++c) tool.force_last[k + static_cast<std::size_t>(c)] -= w[static_cast<std::size_t>(a)] * stored[c];

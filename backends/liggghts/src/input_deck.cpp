@@ -1,6 +1,7 @@
 #include "demfem/backends/liggghts/input_deck.hpp"
 
 #include "demfem/adapter/coupling_api.hpp"
+#include "demfem/backends/physics/dem_formulas.hpp"
 #include "demfem/study/tool_motion.hpp"
 
 #include <algorithm>
@@ -210,17 +211,6 @@ int atomType(const study::Study& study, const std::string& material) {
   return typeOf(materials, material);
 }
 
-double hookeNormalStiffness(double youngs_i_Pa, double poisson_i, double youngs_j_Pa, double poisson_j,
-                            double radius_i_m, double radius_j_m, double mass_i_kg, double mass_j_kg,
-                            double characteristic_velocity_m_s) {
-  const double y_eff = 1.0 / ((1 - poisson_i * poisson_i) / youngs_i_Pa + (1 - poisson_j * poisson_j) / youngs_j_Pa);
-  const double r_eff = radius_j_m > 0 ? radius_i_m * radius_j_m / (radius_i_m + radius_j_m) : radius_i_m;
-  const double m_eff = mass_j_kg > 0 ? mass_i_kg * mass_j_kg / (mass_i_kg + mass_j_kg) : mass_i_kg;
-  const double v = characteristic_velocity_m_s;
-  const double sqrt_r = std::sqrt(r_eff);
-  return 16.0 / 15.0 * sqrt_r * y_eff * std::pow(15.0 * m_eff * v * v / (16.0 * sqrt_r * y_eff), 0.2);
-}
-
 double demTimeStep(const study::Study& study) {
   if (study.dem.dt_s) {
     requirePositive(*study.dem.dt_s, "dem.dt_s");
@@ -232,17 +222,15 @@ double demTimeStep(const study::Study& study) {
   for (const auto& layer : study.soil.layers) {
     const auto& m = study.material(layer.material);
     if (study.dem.criterion == study::TimeStepCriterion::Rayleigh) {
-      const double shear_modulus = m.youngs_Pa / (2 * (1 + m.poisson));
-      critical = std::min(critical, std::numbers::pi * r_min * std::sqrt(m.density_kg_m3 / shear_modulus) /
-                                        (0.1631 * m.poisson + 0.8766));
+      critical = std::min(critical, physics::rayleighTimeStep(r_min, m.density_kg_m3, m.youngs_Pa, m.poisson));
     } else {
       // Stiffest spring: the smallest sphere against the stiffest partner (a wall: R* = R, m* = m).
       const double mass = sphereMass(study, layer.material, r_min);
       double stiffest = 0;
       for (const auto& other : typeMaterials(study)) {
         const auto& o = study.material(other);
-        stiffest = std::max(stiffest, hookeNormalStiffness(m.youngs_Pa, m.poisson, o.youngs_Pa, o.poisson, r_min, 0,
-                                                           mass, 0, study.soil.contact.characteristic_velocity_m_s));
+        stiffest = std::max(stiffest, physics::hookeNormalStiffness(physics::effectiveYoungs(m.youngs_Pa, m.poisson, o.youngs_Pa, o.poisson),
+                                                                    r_min, mass, study.soil.contact.characteristic_velocity_m_s));
       }
       if (study.soil.contact.normal == study::NormalModel::HookeHysteresis)
         stiffest *= study.soil.contact.coefficient_max_elastic_stiffness;

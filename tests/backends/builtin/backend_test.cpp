@@ -48,11 +48,13 @@ study::Study smallStudy() {
   tool.motion.start_z_m = 0.03;
   tool.motion.center_x_m = 0.06;  // the bin's centre line
   tool.motion.insertion_velocity_m_s = 0.05;
+  tool.fem = {true, 4.06e9, 0.38, 1220, 0.00055, 0, study::ElementOrder::Quadratic};  // quick.json's PMMA (the DEM ignores it)
   s.tools = {tool};
   s.fem.dt_s = 0.001;
   s.dem.criterion = study::TimeStepCriterion::StiffestSpring;
   s.dem.dt_fraction = 0.1;
   s.dem.threads = 1;
+  study::validate(s);  // the loader's gate, also for a study built in code
   return s;
 }
 

@@ -1,7 +1,7 @@
 // Test driver for the MPI leader/follower scheme: run under `mpirun -np N`, rank 0 drives the
 // coupling API, the other ranks follow. Drags the small study's tool across the rank boundary and
 // writes, from rank 0, a JSON object with the mean draught force and the bookkeeping checks.
-// Usage: test_liggghts_mpi_drag_driver SEED OUT.json
+// Usage: liggghts_mpi_drag_driver SEED OUT.json
 #include "demfem/backends/liggghts/backend.hpp"
 #include "demfem/adapter/tool_drive.hpp"
 #include "small_study.hpp"

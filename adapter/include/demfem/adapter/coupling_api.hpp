@@ -29,11 +29,12 @@
 //   former). The analytic test backends, built from tools without soil, rest them at the bin origin.
 // - Errors: every call throws CouplingError (with a code) on bad arguments (unknown geometry, wrong
 //   array size, NaN) or a failed simulation; the object stays usable for shutdown()/checkpoint.
+// - Header-only, standard library only (CMake package target demfem::coupling_api): a DEM code
+//   outside demfem implements this interface and serves it with demfem::remote (server.hpp).
 #pragma once
 
-#include "demfem/study/tool_motion.hpp"
-
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <stdexcept>
@@ -91,11 +92,6 @@ struct RigidMotion {
   double t0_s = 0;
 };
 
-// The rigid motion of a plan phase on a DEM clock that read `plan_start_s` at plan time 0.
-inline RigidMotion rigidMotionOf(const study::LinearMotion& phase, double plan_start_s) {
-  return {phase.origin_m, phase.velocity_m_s, plan_start_s + phase.t0_s};
-}
-
 using NodeArray = std::vector<double>;  // n x 3, row-major
 
 // Largest DEM step count a backend reaches (2^53: step counts and step * dt stay exact doubles).
@@ -104,7 +100,18 @@ inline constexpr std::int64_t kMaxDemSteps = std::int64_t{1} << 53;
 // round(duration_s / dt_s), the steps simulate(duration_s) runs after `steps_done` steps. Throws
 // CouplingError(BadRequest) for a duration that is negative or not finite, or when steps_done plus
 // the result would exceed kMaxDemSteps.
-std::int64_t demStepCount(double duration_s, double dt_s, std::int64_t steps_done);
+inline std::int64_t demStepCount(double duration_s, double dt_s, std::int64_t steps_done) {
+  if (!(duration_s >= 0) || !std::isfinite(duration_s))
+    throw CouplingError(ErrorCode::BadRequest, "simulate(" + std::to_string(duration_s) +
+                                                   "): the duration must be finite and >= 0");
+  const double steps = std::round(duration_s / dt_s);
+  // Compared as doubles before any conversion: 1e20 s must not reach llround.
+  if (!(steps <= static_cast<double>(kMaxDemSteps - steps_done)))
+    throw CouplingError(ErrorCode::BadRequest, "simulate(" + std::to_string(duration_s) + " s) would take the DEM past " +
+                                                   std::to_string(kMaxDemSteps) + " steps of " + std::to_string(dt_s) +
+                                                   " s; nothing simulated");
+  return static_cast<std::int64_t>(steps);
+}
 
 class CouplingApi {
  public:

@@ -4,8 +4,11 @@
 // VTK files, and the VTK time-series collections (.pvd) both write.
 //
 // Contract
-// - writeFileAtomically(): the content goes to FILE.tmp, which is synced and closed, then renamed
-//   over FILE; on any failure FILE is unchanged (the old content or absent) and FILE.tmp is removed.
+// - writeFileAtomically(): the one checked atomic write of a whole file (binary formats, JSON
+//   reports, caches): the content goes to FILE.<pid>-<thread>.partial, which is synced and closed,
+//   then renamed over FILE; on any failure FILE is unchanged (the old content or absent) and the
+//   temporary is removed. Writers of one file in several processes or threads never share a
+//   temporary; the last rename wins.
 // - CheckedFile: an output written in pieces; write() passes every byte to the system (no hidden
 //   buffer), so a full disk is reported by the write that hits it. close() syncs before closing.
 // - VtkSeries: a ParaView collection (.pvd, XML) listing data files with their simulated time;

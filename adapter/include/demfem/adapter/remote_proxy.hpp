@@ -35,8 +35,8 @@ struct RemoteOptions {
 
 class RemoteProxy final : public CouplingApi {
  public:
-  // `context`: a ZeroMQ context to share (needed for inproc://); nullptr = own context.
-  explicit RemoteProxy(const RemoteOptions& options, zmq::context_t* context = nullptr);
+  // `context`: a transport context to share (needed for inproc://); nullptr = own context.
+  explicit RemoteProxy(const RemoteOptions& options, protocol::Context* context = nullptr);
   ~RemoteProxy() override;
 
   BackendInfo info() override { return info_; }
@@ -55,7 +55,7 @@ class RemoteProxy final : public CouplingApi {
  private:
   protocol::ReplyBody call(protocol::RequestBody body);
 
-  std::unique_ptr<zmq::context_t> own_context_;
+  std::unique_ptr<protocol::Context> own_context_;
   std::unique_ptr<protocol::ClientSocket> socket_;
   std::string endpoint_;
   std::uint64_t seq_ = 0;

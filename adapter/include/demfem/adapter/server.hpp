@@ -29,7 +29,6 @@
 
 #include "demfem/adapter/coupling_api.hpp"
 #include "demfem/protocol/transport.hpp"
-#include "demfem/study/study.hpp"
 
 #include <chrono>
 #include <cstdint>
@@ -40,9 +39,14 @@
 
 namespace demfem::adapter {
 
+// Longest simulate call a server accepts unless configured: the study file's default
+// coupling.max_simulate_s, study::kDefaultMaxSimulateS (the server tests hold the two together; this
+// header does not include the study library, so that it installs without it).
+inline constexpr double kDefaultMaxSimulateS = 1.0;
+
 struct ServerOptions {
   std::filesystem::path checkpoint_dir;  // empty: no checkpoints
-  double max_simulate_s = study::kDefaultMaxSimulateS;
+  double max_simulate_s = kDefaultMaxSimulateS;
   std::chrono::milliseconds idle_timeout{std::chrono::seconds(60)};
   std::function<void(const std::string&)> log;  // diagnostics not sent to peers; may be empty
 };

@@ -25,6 +25,7 @@
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"
+#include "demfem/study/backend_capabilities.hpp"
 #include "demfem/study/study.hpp"
 
 #include <memory>
@@ -47,6 +48,11 @@ const std::vector<std::string>& testBackendNames();
 // One geometry per tool (plate tools only: the keypoint surface of plate_surface.hpp). Throws
 // CouplingError(Unsupported) for an unknown `kind` or a non-plate tool, (BadRequest) for a
 // non-positive time step.
+// What each test backend offers: no soil (no contact laws), plate tools, checkpoints.
+inline study::BackendCapabilities testBackendCapabilities(const std::string& name) {
+  return {name, false, {}, {}, {}, {study::GeometryKind::Plate}, true};
+}
+
 std::unique_ptr<CouplingApi> makeTestBackend(const std::string& kind, const std::vector<study::Tool>& tools,
                                              const TestLoad& load);
 

@@ -10,8 +10,14 @@
 
 #include "demfem/adapter/coupling_api.hpp"
 #include "demfem/study/study.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 namespace demfem::adapter {
+
+// The rigid motion of a plan phase on a DEM clock that read `plan_start_s` at plan time 0.
+inline RigidMotion rigidMotionOf(const study::LinearMotion& phase, double plan_start_s) {
+  return {phase.origin_m, phase.velocity_m_s, plan_start_s + phase.t0_s};
+}
 
 // Sets the plan's insertion, simulates it (insertion_steps FEM steps in one call) and sets its drag.
 void insertAndStartDrag(CouplingApi& dem, const study::Study& study, const study::Tool& tool);

@@ -26,17 +26,33 @@
 
 #include "demfem/protocol/codec.hpp"
 
-#include <zmq.hpp>
-
-#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
-#include <thread>
 
 namespace demfem::protocol {
+
+class ServerSocket;
+class ClientSocket;
+
+// The ZeroMQ context the sockets of one process share (an inproc:// endpoint reaches only the
+// sockets of its own context). No ZeroMQ type appears in this header: the transport is private to
+// transport.cpp, so code using the protocol needs no ZeroMQ headers.
+class Context {
+ public:
+  Context();
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+ private:
+  friend class ServerSocket;
+  friend class ClientSocket;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 struct CurveKeyPair {
   std::string public_key;  // Z85, 40 characters
@@ -81,7 +97,7 @@ struct Incoming {
 class ServerSocket {
  public:
   // Binds `endpoint` (tcp port "*" picks a free port; see endpoint()).
-  ServerSocket(zmq::context_t& context, const std::string& endpoint,
+  ServerSocket(Context& context, const std::string& endpoint,
                const std::optional<ServerSecurity>& security = std::nullopt);
   ~ServerSocket();
   ServerSocket(const ServerSocket&) = delete;
@@ -96,14 +112,15 @@ class ServerSocket {
 
  private:
   class ZapHandler;
+  struct Sockets;
   std::unique_ptr<ZapHandler> zap_;
-  zmq::socket_t socket_;
+  std::unique_ptr<Sockets> sockets_;
   std::string endpoint_;
 };
 
 class ClientSocket {
  public:
-  ClientSocket(zmq::context_t& context, const std::string& endpoint, std::chrono::milliseconds timeout,
+  ClientSocket(Context& context, const std::string& endpoint, std::chrono::milliseconds timeout,
                const std::optional<ClientSecurity>& security = std::nullopt);
   ~ClientSocket();
   ClientSocket(const ClientSocket&) = delete;
@@ -114,8 +131,8 @@ class ClientSocket {
   const std::string& endpoint() const { return endpoint_; }
 
  private:
-  zmq::socket_t socket_;
-  zmq::socket_t monitor_;  // handshake events: tells a refused key from a silent peer
+  struct Sockets;
+  std::unique_ptr<Sockets> sockets_;
   std::string endpoint_;
   std::chrono::milliseconds timeout_;
   bool broken_ = false;

@@ -3,7 +3,8 @@
 // Contract
 // - Every quantity is SI inside (m, s, kg, N, Pa, rad). The JSON file carries the unit in the key
 //   name (`depth_mm`, `E_Pa`, `alpha_s`); the loader converts once, here nothing is in mm.
-// - A Study returned by loadStudy() has passed validation: every field has the documented type,
+// - A Study returned by loadStudy() has passed validation (validate() applies the same gate to a
+//   study built in code): every field has the documented type,
 //   unit and range, cross-field rules hold (layers tile the bin depth, the interaction table covers
 //   every material pair, constraints lie on the tool). Code using a Study may rely on that.
 // - Frames (docs/architecture.md section 10): bin frame x across, y up (y = 0 bin floor), z along the bin, with
@@ -217,7 +218,7 @@ struct FemSettings {
 enum class TimeStepCriterion { Rayleigh, StiffestSpring };
 
 struct DemSettings {
-  std::string backend = "builtin";   // builtin | liggghts | a test backend name
+  std::string backend = "builtin";   // a backend of this build (study::backendIssues checks it)
   TimeStepCriterion criterion = TimeStepCriterion::Rayleigh;
   double dt_fraction = 0.2;          // of the chosen criterion's critical step
   std::optional<double> dt_s;        // explicit step, overrides the criterion
@@ -277,6 +278,18 @@ Study loadStudy(const std::filesystem::path& file);
 // Same, from JSON text; `origin` names the source in messages and its directory resolves relative
 // file names inside the study.
 Study parseStudy(const std::string& json_text, const std::string& origin);
+
+// The gate every study passes, also one built or changed in code (tests, benchmarks, the loops of
+// campaign/): the same type, range, applicability and cross-field rules as loadStudy(), judged on
+// the study's file form (toJson), so every problem names its JSON path. Throws StudyError listing
+// them (file: study.source, or `study "NAME"` for a study built in code). Relative file names are
+// resolved against study.source's directory (the working directory when it is empty).
+void validate(const Study& study);
+
+// The key reference of docs/study-file.md (its generated section): a Markdown table with one row
+// per key (key, unit or values, range, default, when it applies, meaning), from the key table the
+// loader and toJson() use.
+std::string keyReference();
 
 // The effective study in file form: file units and key names, every default filled in, only the
 // keys that apply to the study's kind and models. parseStudy(toJson(s).dump(), origin) == s.

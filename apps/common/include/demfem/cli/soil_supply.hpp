@@ -16,6 +16,7 @@
 
 #include "demfem/adapter/coupling_api.hpp"
 #include "demfem/adapter/settled_soil.hpp"
+#include "demfem/cli/backend_registry.hpp"
 #include "demfem/study/study.hpp"
 
 #include <filesystem>
@@ -35,9 +36,9 @@ adapter::SettledSoil depositWith(study::DepositionBackend backend, const study::
 // Throws InputError naming `file` and the reason when the soil is not settled and !allow_unsettled.
 void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::path& file, bool allow_unsettled);
 
-// The study's soil DEM `backend` ("builtin" or "liggghts", in this process) on its settled soil: a soil
-// file missing is deposited first (by the study's deposition backend; the built-in backend deposits
-// its own with progress on standard error), then checked by requireSettled().
-std::unique_ptr<adapter::CouplingApi> openSoilBackend(const std::string& backend, const study::Study& study, bool allow_unsettled);
+// The soil DEM `backend` (a soil backend of backend_registry.hpp, in this process) on the study's
+// settled soil: a soil file missing is deposited first (by the study's deposition backend; a backend
+// that deposits its own does so while it is built), then checked by requireSettled().
+std::unique_ptr<adapter::CouplingApi> openSoilBackend(const BackendEntry& backend, const study::Study& study, bool allow_unsettled);
 
 }  // namespace demfem::cli

@@ -4,11 +4,24 @@
 #include "demfem/adapter/coupling_api.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/builtin/triangle_mesh.hpp"
+#include "demfem/study/backend_capabilities.hpp"
+#include "demfem/study/contact_laws.hpp"
 #include "demfem/study/study.hpp"
 
+#include <iterator>
 #include <memory>
 
 namespace demfem::builtin {
+
+// What the built-in DEM offers (docs/builtin-dem.md): every contact law of the study file, plate
+// tools, checkpoints.
+inline study::BackendCapabilities capabilities() {
+  return {"builtin", true,
+          {std::begin(study::kAllNormalModels), std::end(study::kAllNormalModels)},
+          {std::begin(study::kAllCohesionModels), std::end(study::kAllCohesionModels)},
+          {std::begin(study::kAllRollingModels), std::end(study::kAllRollingModels)},
+          {study::GeometryKind::Plate}, true};
+}
 
 // Builds the DEM simulation of `study` (soil, bin, tools at their start positions) ready for the
 // coupling cycle. The soil is the study's settled-soil file adapter::settledSoilFile(study,

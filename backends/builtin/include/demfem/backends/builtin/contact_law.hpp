@@ -46,6 +46,7 @@
 //   (LIGGGHTS coefficientRollingViscousDamping = 0).
 #pragma once
 
+#include "demfem/backends/physics/dem_formulas.hpp"
 #include "demfem/study/study.hpp"
 
 #include <algorithm>
@@ -84,10 +85,7 @@ inline ContactStiffness contactStiffness(const study::ContactModel& model, const
     s.gamma_n = 2.0 * model.damping_factor * std::sqrt(meff * s.kn);  // on the K1 branch
     s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
   } else {
-    const double v = model.characteristic_velocity_m_s;
-    const double sq = std::sqrt(reff);
-    s.kn = 16.0 / 15.0 * sq * law.youngs_eff_Pa *
-           std::pow(15.0 * meff * v * v / (16.0 * sq * law.youngs_eff_Pa), 0.2);
+    s.kn = physics::hookeNormalStiffness(law.youngs_eff_Pa, reff, meff, model.characteristic_velocity_m_s);
     s.kt = s.kn;
     const double q = std::numbers::pi / law.log_restitution;
     s.gamma_n = std::sqrt(4.0 * meff * s.kn / (1.0 + q * q));
@@ -145,6 +143,7 @@ struct ContactResult {
 
 namespace detail {
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline double norm2(const double* a) { return dot3(a, a); }
 inline void cross3(const double* a, const double* b, double* c) {
   c[0] = a[1] * b[2] - a[2] * b[1];
   c[1] = a[2] * b[0] - a[0] * b[2];

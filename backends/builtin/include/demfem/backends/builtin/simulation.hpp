@@ -60,6 +60,7 @@ struct PlaneWall {
   Vec3 point{0, 0, 0};
   Vec3 normal{0, 1, 0};  // unit, pointing into the particle side
   int material = 0;
+  std::int32_t padding = 0;  // named: a checkpoint holds the struct's bytes, none of them undefined
 };
 
 struct Domain {
@@ -72,6 +73,8 @@ struct ParticleState {
   int material = 0;
   int layer = 0;
 };
+
+struct WallTouch;  // a wall feature a particle touches (wall_forces.cpp)
 
 class DemSimulation {
  public:
@@ -151,19 +154,32 @@ class DemSimulation {
     double hist[7];
     ContactStiffness stiffness;     // fixed for the particle-wall pair: computed when the contact opens
     std::int32_t nodes[3];
+    std::int32_t padding;           // named: a checkpoint holds the struct's bytes (zero)
     double weights[3];
     double force[3];                // on the particle
   };
 
   struct CellGrid;
   void step();
+  // neighbour_lists.cpp: linked cells, the half pair list, the wall candidates (broad search)
   void rebuildLists();
   void buildNeighbourList(const CellGrid& grid);
   void buildWallCandidates(const CellGrid& grid);
   bool meshesMovedBeyondSkin() const;
   void updateMeshBinNodes();
-  template <study::NormalModel N, study::RollingModel R> void pairForces();
-  template <study::NormalModel N, study::RollingModel R> void wallForces();
+  // pair_forces.cpp and wall_forces.cpp: each a loop per contact model (template arguments)
+  void pairForces();
+  template <study::NormalModel N, study::RollingModel R> void pairLoop();
+  void wallForces();
+  template <study::NormalModel N, study::RollingModel R> void wallLoop();
+  int planeTouches(std::size_t i, WallTouch* touch, int count) const;  // fine search: appends, returns the count
+  int meshTouches(std::size_t i, WallTouch* touch, int count) const;
+  void matchHistory(std::size_t i, const WallTouch* touch, int count, const bool* accepted, int* matched_old) const;
+  WallContact openWallContact(std::size_t i, const WallTouch& touch, int matched_old) const;
+  Vec3 wallVelocity(const WallTouch& touch) const;
+  int wallMaterial(int wall) const;
+  void gatherWallContacts();
+  void scatterWallForces();
   void resetForce(std::size_t i) {  // gravity only, no torque: the start of every force evaluation
     for (int c = 0; c < 3; ++c) {
       f_[3 * i + c] = mass_[i] * gravity_[c];

@@ -29,6 +29,7 @@
 
 #include "demfem/adapter/coupling_api.hpp"
 #include "demfem/adapter/settled_soil.hpp"
+#include "demfem/study/backend_capabilities.hpp"
 #include "demfem/study/study.hpp"
 
 #include <array>
@@ -39,6 +40,17 @@
 #include <vector>
 
 namespace demfem::liggghts {
+
+// What the LIGGGHTS backend offers (docs/liggghts-backend.md): LIGGGHTS' own contact laws, plate
+// tools, no checkpoints.
+inline study::BackendCapabilities capabilities() {
+  using namespace study;
+  return {"liggghts", true,
+          {NormalModel::Hooke, NormalModel::HookeHysteresis},
+          {CohesionModel::None, CohesionModel::Sjkr, CohesionModel::Sjkr2},
+          {RollingModel::None, RollingModel::Cdt, RollingModel::Epsd},
+          {GeometryKind::Plate}, false};
+}
 
 // A sphere in the bin (bin frame, metres) of a particle material of the study.
 struct Sphere {

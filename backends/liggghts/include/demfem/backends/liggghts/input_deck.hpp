@@ -50,15 +50,9 @@ struct InputDeck {
 // The DEM step the deck uses: the study's explicit dem.dt_s, else dem.dt_fraction of the critical
 // step of dem.criterion: Rayleigh dt_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766) at the smallest
 // particle (docs/architecture.md section 11), or StiffestSpring pi sqrt(m*/k_max) with k_max the stiffest spring
-// of LIGGGHTS' hooke law (k2max = kn * coefficientMaxElasticStiffness for hooke/hysteresis).
+// of LIGGGHTS' hooke law (k2max = kn * coefficientMaxElasticStiffness for hooke/hysteresis); the
+// formulas are the shared ones of both backends (docs/architecture.md section 11).
 double demTimeStep(const study::Study& study);
-
-// LIGGGHTS hooke normal stiffness (LIGGGHTS 3.8 normal_model_hooke: kn = 16/15 sqrt(R*) Y*
-// (15 m* Y* V^2 / (16 sqrt(R*) Y*))^(1/5), V the characteristic velocity), for two spheres or, with
-// radius_j = 0 and mass_j = 0, a sphere against a wall (R* = R_i, m* = m_i).
-double hookeNormalStiffness(double youngs_i_Pa, double poisson_i, double youngs_j_Pa, double poisson_j,
-                            double radius_i_m, double radius_j_m, double mass_i_kg, double mass_j_kg,
-                            double characteristic_velocity_m_s);
 
 // The LIGGGHTS atom type (1-based) of a material under the ordering above; throws BadRequest for a
 // material that is not used by the study's layers, bin or tools.
