@@ -1,5 +1,6 @@
 #include "demfem/adapter/cone_drive.hpp"
 
+#include "demfem/adapter/tool_drive.hpp"
 #include "demfem/study/tool_motion.hpp"
 
 #include <nlohmann/json.hpp>

@@ -214,7 +214,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
   // tool files of the same instant carry the same number and time).
   void writeVtk() {
     char index[24];
-    std::snprintf(index, sizeof(index), "_%06lld.vtk", static_cast<long long>(std::llround(sim_.time() / study_.fem.dt_s)));
+    std::snprintf(index, sizeof(index), "_%06lld.vtp", static_cast<long long>(std::llround(sim_.time() / study_.fem.dt_s)));
     const std::string particles = std::string("particles") + index;
     sim_.writeParticlesVtk(vtkDirectory() / particles);
     vtk_series_.at("particles").add(sim_.time(), particles);

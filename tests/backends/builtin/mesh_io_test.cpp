@@ -1,9 +1,8 @@
 // STL import and VTK output of the builtin DEM.
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/triangle_mesh.hpp"
-#include "test_soil.hpp"
-
 #include "demfem/vtkio/vtk_files.hpp"
+#include "test_soil.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -109,19 +108,19 @@ TEST_CASE("VTK files of particles and meshes hold the positions, connectivity, v
   // Read back by VTK's own XML reader (vtkio::read) with the declared arrays and sizes.
   const auto pfile = tempFile("particles.vtp");
   sim.writeParticlesVtk(pfile);
-  const auto p = vtkio::read(pfile);
+  const auto p = demfem::vtkio::read(pfile);
   CHECK(p.time_s == sim.time());
   REQUIRE(p.pointCount() == 3);
   for (int i = 0; i < 3; ++i)
     for (int c = 0; c < 3; ++c) CHECK(p.points[3 * i + c] == particles[i].x[c]);
   CHECK(p.array("velocity_m_s").values[8] == 3.0);
   CHECK(p.array("radius_m").values == std::vector<double>{0.005, 0.006, 0.007});
-  CHECK(p.array("layer").type == vtkio::ValueType::Int32);
+  CHECK(p.array("layer").type == demfem::vtkio::ValueType::Int32);
   CHECK(p.array("force_N").components == 3);
 
   const auto mfile = tempFile("mesh.vtp");
   sim.writeMeshVtk(0, mfile);
-  const auto m = vtkio::read(mfile);
+  const auto m = demfem::vtkio::read(mfile);
   CHECK(m.pointCount() == 4);
   REQUIRE(m.triangles.size() == 4);
   for (std::size_t t = 0; t < 4; ++t)

@@ -45,7 +45,7 @@ struct Series {
   std::string color = kMeasuredColor;
   SeriesStyle style = SeriesStyle::Line;
   double line_width = 1.5;
-  std::vector<double> y_high;  // Band only: the upper edge, one per x
+  std::vector<double> y_high{};  // Band only: the upper edge, one per x
 };
 
 struct XYPanel {
