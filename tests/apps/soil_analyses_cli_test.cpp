@@ -89,15 +89,15 @@ TEST_CASE("demfem soil-motion analyses the ParaView files of a coupled run", "[a
   const fs::path dir = freshDir("soil-motion-cli");
   ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);
   nlohmann::json study = nlohmann::json::parse(readText(fastQuickStudy(dir)));
-  study["soil"]["bin"]["length_mm"] = 100;
-  study["soil"]["bin"]["width_mm"] = 60;
+  study["soil"]["bin"]["length_mm"] = 80;  // json_stdout_test's tiny bin: about 170 particles
+  study["soil"]["bin"]["width_mm"] = 50;
   study["tools"][0]["motion"]["stroke_mm"] = 20;
   study["tools"][0]["motion"]["start_z_mm"] = 30;
   study["output"]["vtk_every"] = 50;
   const fs::path file = dir / "tiny_vtk.json";
   std::ofstream(file) << study.dump(2);
   Process run({app("demfem"), "run", file.string(), "--output", (dir / "run").string(), "--quiet"}, dir / "run");
-  const int status = run.wait(600s);
+  const int status = run.wait(840s);
   INFO(run.err());
   REQUIRE(exitedOk(status));
   CHECK(fs::exists(dir / "run" / "vtk" / "particles_000000.vtp"));
