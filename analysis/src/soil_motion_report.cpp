@@ -24,7 +24,9 @@ std::size_t frameAt(const RunFrames& run, double target) {
   std::size_t best = 0;
   for (std::size_t k = 1; k < run.time_s.size(); ++k)
     if (std::fabs(toolDisplacement(run, k) - target) < std::fabs(toolDisplacement(run, best) - target)) best = k;
-  const double spacing = std::fabs(toolDisplacement(run, run.time_s.size() - 1)) / static_cast<double>(run.time_s.size() - 1);
+  double spacing = 0;  // the largest step between consecutive frames (the insertion's frames do not move in z)
+  for (std::size_t k = 1; k < run.time_s.size(); ++k)
+    spacing = std::max(spacing, std::fabs(toolDisplacement(run, k) - toolDisplacement(run, k - 1)));
   if (std::fabs(toolDisplacement(run, best) - target) > 0.5 * spacing + 1e-9)
     throw InputError(run.directory.string() + ": no particle file near a tool displacement of " + std::to_string(target * 1e3) +
                      " mm (the frames reach " + std::to_string(toolDisplacement(run, run.time_s.size() - 1) * 1e3) + " mm)");

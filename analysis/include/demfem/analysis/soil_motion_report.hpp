@@ -3,8 +3,8 @@
 //
 // Contract
 // - analyseRun(): for every requested tool displacement, the particle frame whose toolDisplacement()
-//   is nearest (InputError when the run's displacements miss it by more than half the spacing of its
-//   frames, or the run has fewer than two frames): the vertical section through the tool's centre
+//   is nearest (InputError when the run's displacements miss it by more than half the largest step
+//   between consecutive frames, or the run has fewer than two frames): the vertical section through the tool's centre
 //   (x = mid of its bounds), one horizontal section at half the tool's tip depth, the moving extent
 //   above `threshold_m_s`, the speed range in front of the tool (across its width, from its tip up to
 //   the surface, from its front face to `front_reach_m` ahead) and the mixing index; the mixing of the
