@@ -171,7 +171,14 @@ ComparisonResult compare(const std::vector<Recording>& measured, const std::vect
     c.deformation_difference_percent = percentDifference(m.deformation_mean_mm, s->deformation_mean_mm);
     const std::string what = "case " + m.key.title();
     c.force_spectrum = compareSpectra(measured_runs.at(m.key), simulated_runs.at(m.key), false, settings, what + ", force spectrum");
-    c.deformation_spectrum = compareSpectra(measured_runs.at(m.key), simulated_runs.at(m.key), true, settings, what + ", deformation spectrum");
+    // A rigid tool (a DEM simulation's draught) records no deformation on either side: no spectrum.
+    const auto rigid = [](const std::vector<const EvaluatedRun*>& runs) {
+      return std::all_of(runs.begin(), runs.end(), [](const EvaluatedRun* r) {
+        return std::all_of(r->curve.deformation_mm.begin(), r->curve.deformation_mm.end(), [](double d) { return d == 0.0; });
+      });
+    };
+    if (!rigid(measured_runs.at(m.key)) || !rigid(simulated_runs.at(m.key)))
+      c.deformation_spectrum = compareSpectra(measured_runs.at(m.key), simulated_runs.at(m.key), true, settings, what + ", deformation spectrum");
     result.soil_bin.push_back(std::move(c));
   }
   for (const auto& s : result.simulated.soil_bin_cases)

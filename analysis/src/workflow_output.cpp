@@ -4,8 +4,10 @@
 
 #include "group_by_case.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -396,6 +398,211 @@ void writeEvaluation(const EvaluationResult& result, const AnalysisSettings& set
   out.writeText("report.md", md.str());
 }
 
+namespace {
+
+// One column of a report section's CSV table: its name (the unit in the name) and its cell of a row.
+template <class Row>
+struct Column {
+  std::string name;
+  std::function<std::string(const Row&)> cell;
+};
+
+template <class Row>
+Table tableOf(const std::vector<Column<Row>>& columns, const std::vector<Row>& rows) {
+  Table table;
+  for (const Column<Row>& c : columns) table.header.push_back(c.name);
+  for (const Row& row : rows) {
+    std::vector<std::string>& cells = table.rows.emplace_back();
+    for (const Column<Row>& c : columns) cells.push_back(c.cell(row));
+  }
+  return table;
+}
+
+// --- soil-bin section: means (Fig. 15) and spectra (Fig. 17) ---
+
+const std::vector<Column<const SoilBinComparison*>>& meansColumns() {
+  using R = const SoilBinComparison*;
+  static const std::vector<Column<R>> columns{
+      {"case", [](R c) { return c->key.label(); }},
+      {"tool", [](R c) { return c->key.tool; }},
+      {"depth_mm", [](R c) { return num(c->key.depth_mm); }},
+      {"measured_force_mean_N", [](R c) { return num(c->measured.force_mean_N); }},
+      {"measured_force_std_N", [](R c) { return num(c->measured.force_std_N); }},
+      {"simulated_force_mean_N", [](R c) { return num(c->simulated.force_mean_N); }},
+      {"simulated_force_std_N", [](R c) { return num(c->simulated.force_std_N); }},
+      {"force_difference_percent", [](R c) { return num(c->force_difference_percent); }},
+      {"measured_deformation_mean_mm", [](R c) { return num(c->measured.deformation_mean_mm); }},
+      {"measured_deformation_std_mm", [](R c) { return num(c->measured.deformation_std_mm); }},
+      {"simulated_deformation_mean_mm", [](R c) { return num(c->simulated.deformation_mean_mm); }},
+      {"simulated_deformation_std_mm", [](R c) { return num(c->simulated.deformation_std_mm); }},
+      {"deformation_difference_percent", [](R c) { return num(c->deformation_difference_percent); }}};
+  return columns;
+}
+
+struct SpectrumRow {
+  const SoilBinComparison* c;
+  std::string signal;
+  const SpectralComparison* s;
+};
+
+const std::vector<Column<SpectrumRow>>& spectraColumns() {
+  using R = SpectrumRow;
+  static const std::vector<Column<R>> columns{
+      {"case", [](const R& r) { return r.c->key.label(); }},
+      {"signal", [](const R& r) { return r.signal; }},
+      {"f_low_Hz", [](const R& r) { return num(r.s->measured_fit.f_low_Hz); }},
+      {"f_high_Hz", [](const R& r) { return num(r.s->measured_fit.f_high_Hz); }},
+      {"measured_a", [](const R& r) { return num(r.s->measured_fit.a); }},
+      {"measured_b", [](const R& r) { return num(r.s->measured_fit.b); }},
+      {"measured_b_std_error", [](const R& r) { return num(r.s->measured_fit.b_std_error); }},
+      {"simulated_a", [](const R& r) { return num(r.s->simulated_fit.a); }},
+      {"simulated_b", [](const R& r) { return num(r.s->simulated_fit.b); }},
+      {"simulated_b_std_error", [](const R& r) { return num(r.s->simulated_fit.b_std_error); }},
+      {"amplitude_ratio_at_1Hz", [](const R& r) { return num(r.s->amplitude_ratio_at_1Hz); }},
+      {"mean_fitted_amplitude_ratio", [](const R& r) { return num(r.s->mean_fitted_ratio); }}};
+  return columns;
+}
+
+void writeSoilBinSection(const ComparisonResult& result, StagedOutput& out, const GnuplotRenderer* renderer,
+                         std::ostringstream& md) {
+  std::vector<const SoilBinComparison*> cases;
+  std::vector<SpectrumRow> spectrum_rows;
+  std::vector<std::vector<std::string>> md_means, md_spectra;
+  std::vector<const PooledCase*> measured, simulated;
+  for (const auto& c : result.soil_bin) {
+    cases.push_back(&c);
+    measured.push_back(&c.measured);
+    simulated.push_back(&c.simulated);
+    md_means.push_back({c.key.title(), plusMinus(c.measured.force_mean_N, c.measured.force_std_N),
+                        plusMinus(c.simulated.force_mean_N, c.simulated.force_std_N), shortNum(c.force_difference_percent, 3),
+                        plusMinus(c.measured.deformation_mean_mm, c.measured.deformation_std_mm),
+                        plusMinus(c.simulated.deformation_mean_mm, c.simulated.deformation_std_mm), shortNum(c.deformation_difference_percent, 3)});
+    for (const auto& [signal, s] : {std::pair<std::string, const SpectralComparison*>{"force_N", &c.force_spectrum}, {"deformation_mm", &c.deformation_spectrum}}) {
+      spectrum_rows.push_back({&c, signal, s});
+      md_spectra.push_back({c.key.title(), signal, shortNum(s->measured_fit.f_low_Hz, 3) + "-" + shortNum(s->measured_fit.f_high_Hz, 3),
+                            shortNum(s->measured_fit.a, 3) + " f^" + shortNum(s->measured_fit.b, 3),
+                            shortNum(s->simulated_fit.a, 3) + " f^" + shortNum(s->simulated_fit.b, 3), shortNum(s->mean_fitted_ratio, 3)});
+    }
+    const auto sim_runs = detail::groupByCase(result.simulated.soil_bin_runs).at(c.key);
+    const auto meas_runs = detail::groupByCase(result.measured.soil_bin_runs).at(c.key);
+    for (std::size_t r = 0; r < meas_runs.size(); ++r)
+      out.writeText("spectra/" + runName(c.key, meas_runs[r]->repeat) + "_measured.csv",
+                    spectrumCsv(c.force_spectrum.measured[r], c.deformation_spectrum.measured[r]));
+    for (std::size_t r = 0; r < sim_runs.size(); ++r)
+      out.writeText("spectra/" + runName(c.key, sim_runs[r]->repeat) + "_simulated.csv",
+                    spectrumCsv(c.force_spectrum.simulated[r], c.deformation_spectrum.simulated[r]));
+  }
+  out.writeText("means.csv", tableOf(meansColumns(), cases).csv());
+  out.writeText("spectra.csv", tableOf(spectraColumns(), spectrum_rows).csv());
+  md << "## Soil-bin cases\n\n### Means over the window (Fig. 15)\n\nDifference = 100 (simulated - measured) / measured.\n\n"
+     << markdown({"case", "measured force (N)", "simulated force (N)", "force diff. (%)", "measured deformation (mm)",
+                  "simulated deformation (mm)", "deformation diff. (%)"},
+                 md_means)
+     << "\n" << plot(out, renderer, "means", meansFigure(measured, simulated));
+  md << "### Force and deformation against displacement (Figs. 9, 14)\n\n";
+  const auto measured_runs = detail::groupByCase(result.measured.soil_bin_runs);
+  const auto simulated_runs = detail::groupByCase(result.simulated.soil_bin_runs);
+  for (const auto& c : result.soil_bin)
+    md << plot(out, renderer, c.key.label() + "_curves",
+               curvesFigure(c.key, measured_runs.at(c.key), c.measured, &simulated_runs.at(c.key), &c.simulated));
+  md << "### FFT amplitude spectra of the window segment with power-law fits a f^b (Section 3.6, Fig. 17)\n\nRatio = geometric mean of "
+        "fitted simulated / fitted measured amplitude over the band.\n\n"
+     << markdown({"case", "signal", "band (Hz)", "measured fit", "simulated fit", "ratio"}, md_spectra) << "\n";
+  for (const auto& c : result.soil_bin) {
+    Figure figure;
+    figure.title = c.key.title() + ": FFT amplitude spectra and fitted power laws";
+    figure.columns = 2;
+    figure.row_height_px = 420;
+    figure.panels = {spectrumPanel("a) deformation", "mm", c.deformation_spectrum), spectrumPanel("b) force", "N", c.force_spectrum)};
+    md << plot(out, renderer, c.key.label() + "_spectra", figure);
+  }
+}
+
+// --- calibration section (Section 3.1, Figs. 7, 8) ---
+
+struct CalibrationRow {
+  const CalibrationComparison* c;
+  std::string signal;
+  const ResponseSummary* measured;
+  const ResponseSummary* simulated;
+  double correlation;  // mean over the measured repeats
+};
+
+// The five columns of one statistic of the responses: measured mean and spread, simulated mean and
+// spread, and the difference of the means in percent.
+void addStatistic(std::vector<Column<CalibrationRow>>& columns, const std::array<std::string, 5>& names,
+                  SignalStatistics ResponseSummary::*statistic) {
+  using R = CalibrationRow;
+  columns.push_back({names[0], [statistic](const R& r) { return num((r.measured->*statistic).mean); }});
+  columns.push_back({names[1], [statistic](const R& r) { return num((r.measured->*statistic).std_dev); }});
+  columns.push_back({names[2], [statistic](const R& r) { return num((r.simulated->*statistic).mean); }});
+  columns.push_back({names[3], [statistic](const R& r) { return num((r.simulated->*statistic).std_dev); }});
+  columns.push_back({names[4], [statistic](const R& r) {
+                       return num(percentDifference((r.measured->*statistic).mean, (r.simulated->*statistic).mean));
+                     }});
+}
+
+const std::vector<Column<CalibrationRow>>& calibrationColumns() {
+  using R = CalibrationRow;
+  static const std::vector<Column<R>> columns = [] {
+    std::vector<Column<R>> c{{"case", [](const R& r) { return r.c->key.label(); }},
+                             {"signal", [](const R& r) { return r.signal; }}};
+    addStatistic(c, {"measured_steady_value", "measured_steady_std", "simulated_steady_value", "simulated_steady_std",
+                     "steady_value_difference_percent"},
+                 &ResponseSummary::steady);
+    addStatistic(c, {"measured_frequency_mean_Hz", "measured_frequency_std_Hz", "simulated_frequency_mean_Hz",
+                     "simulated_frequency_std_Hz", "frequency_difference_percent"},
+                 &ResponseSummary::frequency_Hz);
+    addStatistic(c, {"measured_damping_ratio_mean", "measured_damping_ratio_std", "simulated_damping_ratio_mean",
+                     "simulated_damping_ratio_std", "damping_ratio_difference_percent"},
+                 &ResponseSummary::damping_ratio);
+    c.push_back({"correlation_mean", [](const R& r) { return num(r.correlation); }});
+    return c;
+  }();
+  return columns;
+}
+
+void writeCalibrationSection(const ComparisonResult& result, StagedOutput& out, const GnuplotRenderer* renderer,
+                             std::ostringstream& md) {
+  std::vector<CalibrationRow> rows;
+  std::vector<std::vector<std::string>> md_rows;
+  const auto simulated_runs = detail::groupByCase(result.simulated.calibration_runs);
+  const auto measured_runs = detail::groupByCase(result.measured.calibration_runs);
+  md << "## Calibration-weight cases (Section 3.1, Figs. 7, 8)\n\n";
+  std::ostringstream figures;
+  for (const auto& c : result.calibration) {
+    for (const bool is_force : {false, true}) {
+      const ResponseSummary& m = is_force ? c.measured.force : c.measured.deformation;
+      const ResponseSummary& s = is_force ? c.simulated.force : c.simulated.deformation;
+      double correlation = 0.0;
+      for (const auto& corr : c.correlations) correlation += (is_force ? corr.force : corr.deformation).correlation;
+      correlation /= static_cast<double>(c.correlations.size());
+      const std::string signal = is_force ? "force_N" : "deformation_mm";
+      rows.push_back({&c, signal, &m, &s, correlation});
+      md_rows.push_back({c.key.title(), signal, shortNum(m.steady.mean) + " / " + shortNum(s.steady.mean),
+                         plusMinus(m.frequency_Hz.mean, m.frequency_Hz.std_dev) + " / " + plusMinus(s.frequency_Hz.mean, s.frequency_Hz.std_dev),
+                         plusMinus(m.damping_ratio.mean, m.damping_ratio.std_dev) + " / " + plusMinus(s.damping_ratio.mean, s.damping_ratio.std_dev),
+                         shortNum(correlation, 3)});
+    }
+    // Align every curve on the first measured repeat: repeat k moves by (its shift to the
+    // simulation) - (the first repeat's), the simulation by the first repeat's shift.
+    const auto& first = c.correlations.front();
+    std::vector<HistoryShift> shifts;
+    for (const auto& corr : c.correlations)
+      shifts.push_back({first.force.shift_s - corr.force.shift_s, first.deformation.shift_s - corr.deformation.shift_s});
+    figures << plot(out, renderer, c.key.label() + "_history",
+                    historyFigure(c.key, measured_runs.at(c.key), shifts, simulated_runs.at(c.key).front(),
+                                  {first.force.shift_s, first.deformation.shift_s}));
+    figures << plot(out, renderer, c.key.label() + "_response", responseFigure(c));
+  }
+  out.writeText("calibration.csv", tableOf(calibrationColumns(), rows).csv());
+  md << "Measured / simulated; correlation after aligning the first local maxima (mean over the measured repeats).\n\n"
+     << markdown({"case", "signal", "steady value", "frequency (Hz)", "damping ratio", "correlation"}, md_rows) << "\n"
+     << figures.str();
+}
+
+}  // namespace
+
 void writeComparison(const ComparisonResult& result, const AnalysisSettings& settings, StagedOutput& out, const GnuplotRenderer* renderer) {
   std::ostringstream md;
   md << "# Measured against simulated\n\n" << settingsMarkdown(settings);
@@ -408,116 +615,8 @@ void writeComparison(const ComparisonResult& result, const AnalysisSettings& set
     md << "\n";
   }
   if (!renderer) md << "Plots were not requested (--no-plots).\n\n";
-
-  if (!result.soil_bin.empty()) {
-    Table means;
-    means.header = {"case", "tool", "depth_mm", "measured_force_mean_N", "measured_force_std_N", "simulated_force_mean_N",
-                    "simulated_force_std_N", "force_difference_percent", "measured_deformation_mean_mm", "measured_deformation_std_mm",
-                    "simulated_deformation_mean_mm", "simulated_deformation_std_mm", "deformation_difference_percent"};
-    Table spectra;
-    spectra.header = {"case", "signal", "f_low_Hz", "f_high_Hz", "measured_a", "measured_b", "measured_b_std_error", "simulated_a", "simulated_b",
-                      "simulated_b_std_error", "amplitude_ratio_at_1Hz", "mean_fitted_amplitude_ratio"};
-    std::vector<std::vector<std::string>> md_means, md_spectra;
-    std::vector<const PooledCase*> measured, simulated;
-    for (const auto& c : result.soil_bin) {
-      measured.push_back(&c.measured);
-      simulated.push_back(&c.simulated);
-      means.rows.push_back({c.key.label(), c.key.tool, num(c.key.depth_mm), num(c.measured.force_mean_N), num(c.measured.force_std_N),
-                            num(c.simulated.force_mean_N), num(c.simulated.force_std_N), num(c.force_difference_percent),
-                            num(c.measured.deformation_mean_mm), num(c.measured.deformation_std_mm), num(c.simulated.deformation_mean_mm),
-                            num(c.simulated.deformation_std_mm), num(c.deformation_difference_percent)});
-      md_means.push_back({c.key.title(), plusMinus(c.measured.force_mean_N, c.measured.force_std_N),
-                          plusMinus(c.simulated.force_mean_N, c.simulated.force_std_N), shortNum(c.force_difference_percent, 3),
-                          plusMinus(c.measured.deformation_mean_mm, c.measured.deformation_std_mm),
-                          plusMinus(c.simulated.deformation_mean_mm, c.simulated.deformation_std_mm), shortNum(c.deformation_difference_percent, 3)});
-      for (const auto& [signal, s] : {std::pair<std::string, const SpectralComparison*>{"force_N", &c.force_spectrum}, {"deformation_mm", &c.deformation_spectrum}}) {
-        spectra.rows.push_back({c.key.label(), signal, num(s->measured_fit.f_low_Hz), num(s->measured_fit.f_high_Hz), num(s->measured_fit.a),
-                                num(s->measured_fit.b), num(s->measured_fit.b_std_error), num(s->simulated_fit.a), num(s->simulated_fit.b),
-                                num(s->simulated_fit.b_std_error), num(s->amplitude_ratio_at_1Hz), num(s->mean_fitted_ratio)});
-        md_spectra.push_back({c.key.title(), signal, shortNum(s->measured_fit.f_low_Hz, 3) + "-" + shortNum(s->measured_fit.f_high_Hz, 3),
-                              shortNum(s->measured_fit.a, 3) + " f^" + shortNum(s->measured_fit.b, 3),
-                              shortNum(s->simulated_fit.a, 3) + " f^" + shortNum(s->simulated_fit.b, 3), shortNum(s->mean_fitted_ratio, 3)});
-      }
-      const auto sim_runs = detail::groupByCase(result.simulated.soil_bin_runs).at(c.key);
-      const auto meas_runs = detail::groupByCase(result.measured.soil_bin_runs).at(c.key);
-      for (std::size_t r = 0; r < meas_runs.size(); ++r)
-        out.writeText("spectra/" + runName(c.key, meas_runs[r]->repeat) + "_measured.csv",
-                      spectrumCsv(c.force_spectrum.measured[r], c.deformation_spectrum.measured[r]));
-      for (std::size_t r = 0; r < sim_runs.size(); ++r)
-        out.writeText("spectra/" + runName(c.key, sim_runs[r]->repeat) + "_simulated.csv",
-                      spectrumCsv(c.force_spectrum.simulated[r], c.deformation_spectrum.simulated[r]));
-    }
-    out.writeText("means.csv", means.csv());
-    out.writeText("spectra.csv", spectra.csv());
-    md << "## Soil-bin cases\n\n### Means over the window (Fig. 15)\n\nDifference = 100 (simulated - measured) / measured.\n\n"
-       << markdown({"case", "measured force (N)", "simulated force (N)", "force diff. (%)", "measured deformation (mm)",
-                    "simulated deformation (mm)", "deformation diff. (%)"},
-                   md_means)
-       << "\n" << plot(out, renderer, "means", meansFigure(measured, simulated));
-    md << "### Force and deformation against displacement (Figs. 9, 14)\n\n";
-    const auto measured_runs = detail::groupByCase(result.measured.soil_bin_runs);
-    const auto simulated_runs = detail::groupByCase(result.simulated.soil_bin_runs);
-    for (const auto& c : result.soil_bin)
-      md << plot(out, renderer, c.key.label() + "_curves",
-                 curvesFigure(c.key, measured_runs.at(c.key), c.measured, &simulated_runs.at(c.key), &c.simulated));
-    md << "### FFT amplitude spectra of the window segment with power-law fits a f^b (Section 3.6, Fig. 17)\n\nRatio = geometric mean of "
-          "fitted simulated / fitted measured amplitude over the band.\n\n"
-       << markdown({"case", "signal", "band (Hz)", "measured fit", "simulated fit", "ratio"}, md_spectra) << "\n";
-    for (const auto& c : result.soil_bin) {
-      Figure figure;
-      figure.title = c.key.title() + ": FFT amplitude spectra and fitted power laws";
-      figure.columns = 2;
-      figure.row_height_px = 420;
-      figure.panels = {spectrumPanel("a) deformation", "mm", c.deformation_spectrum), spectrumPanel("b) force", "N", c.force_spectrum)};
-      md << plot(out, renderer, c.key.label() + "_spectra", figure);
-    }
-  }
-
-  if (!result.calibration.empty()) {
-    Table table;
-    table.header = {"case", "signal", "measured_steady_value", "measured_steady_std", "simulated_steady_value", "simulated_steady_std",
-                    "steady_value_difference_percent", "measured_frequency_mean_Hz", "measured_frequency_std_Hz", "simulated_frequency_mean_Hz",
-                    "simulated_frequency_std_Hz", "frequency_difference_percent", "measured_damping_ratio_mean", "measured_damping_ratio_std",
-                    "simulated_damping_ratio_mean", "simulated_damping_ratio_std", "damping_ratio_difference_percent", "correlation_mean"};
-    std::vector<std::vector<std::string>> md_rows;
-    const auto simulated_runs = detail::groupByCase(result.simulated.calibration_runs);
-    const auto measured_runs = detail::groupByCase(result.measured.calibration_runs);
-    md << "## Calibration-weight cases (Section 3.1, Figs. 7, 8)\n\n";
-    std::ostringstream figures;
-    for (const auto& c : result.calibration) {
-      for (const bool is_force : {false, true}) {
-        const ResponseSummary& m = is_force ? c.measured.force : c.measured.deformation;
-        const ResponseSummary& s = is_force ? c.simulated.force : c.simulated.deformation;
-        double correlation = 0.0;
-        for (const auto& corr : c.correlations) correlation += (is_force ? corr.force : corr.deformation).correlation;
-        correlation /= static_cast<double>(c.correlations.size());
-        const std::string signal = is_force ? "force_N" : "deformation_mm";
-        table.rows.push_back({c.key.label(), signal, num(m.steady.mean), num(m.steady.std_dev), num(s.steady.mean), num(s.steady.std_dev),
-                              num(percentDifference(m.steady.mean, s.steady.mean)), num(m.frequency_Hz.mean), num(m.frequency_Hz.std_dev),
-                              num(s.frequency_Hz.mean), num(s.frequency_Hz.std_dev), num(percentDifference(m.frequency_Hz.mean, s.frequency_Hz.mean)),
-                              num(m.damping_ratio.mean), num(m.damping_ratio.std_dev), num(s.damping_ratio.mean), num(s.damping_ratio.std_dev),
-                              num(percentDifference(m.damping_ratio.mean, s.damping_ratio.mean)), num(correlation)});
-        md_rows.push_back({c.key.title(), signal, shortNum(m.steady.mean) + " / " + shortNum(s.steady.mean),
-                           plusMinus(m.frequency_Hz.mean, m.frequency_Hz.std_dev) + " / " + plusMinus(s.frequency_Hz.mean, s.frequency_Hz.std_dev),
-                           plusMinus(m.damping_ratio.mean, m.damping_ratio.std_dev) + " / " + plusMinus(s.damping_ratio.mean, s.damping_ratio.std_dev),
-                           shortNum(correlation, 3)});
-      }
-      // Align every curve on the first measured repeat: repeat k moves by (its shift to the
-      // simulation) - (the first repeat's), the simulation by the first repeat's shift.
-      const auto& first = c.correlations.front();
-      std::vector<HistoryShift> shifts;
-      for (const auto& corr : c.correlations)
-        shifts.push_back({first.force.shift_s - corr.force.shift_s, first.deformation.shift_s - corr.deformation.shift_s});
-      figures << plot(out, renderer, c.key.label() + "_history",
-                      historyFigure(c.key, measured_runs.at(c.key), shifts, simulated_runs.at(c.key).front(),
-                                    {first.force.shift_s, first.deformation.shift_s}));
-      figures << plot(out, renderer, c.key.label() + "_response", responseFigure(c));
-    }
-    out.writeText("calibration.csv", table.csv());
-    md << "Measured / simulated; correlation after aligning the first local maxima (mean over the measured repeats).\n\n"
-       << markdown({"case", "signal", "steady value", "frequency (Hz)", "damping ratio", "correlation"}, md_rows) << "\n"
-       << figures.str();
-  }
+  if (!result.soil_bin.empty()) writeSoilBinSection(result, out, renderer, md);
+  if (!result.calibration.empty()) writeCalibrationSection(result, out, renderer, md);
   out.writeText("report.md", md.str());
 }
 

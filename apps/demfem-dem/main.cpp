@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
   app.add_option("--curve-keys", o.curve_keys, "CurveZMQ key directory (server.pub, server.secret, client.pub)")
       ->check(CLI::ExistingDirectory);
   app.add_option("--make-curve-keys", o.make_curve_keys, "Write a fresh server and client key pair to DIR and exit");
-  app.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
+  app.add_option("--threads", o.threads, "threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
       ->check(CLI::PositiveNumber);
   app.add_option("--endpoint-file", o.endpoint_file, "Write the bound endpoint (with the chosen port) to FILE");
   app.add_option("--checkpoint-dir", o.checkpoint_dir,

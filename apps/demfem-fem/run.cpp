@@ -7,7 +7,10 @@
 #include "demfem/study/study.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
+#include <filesystem>
+#include <thread>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -26,6 +29,7 @@ struct RunOptions {
   std::string endpoint;
   std::string curve_keys;
   std::string output_dir;
+  std::string wait_for;  // file whose appearance says the DEM server serves (demfem run)
   double timeout_s = 0;
   std::int64_t steps = 0;
   std::int64_t checkpoint_every = 0;
@@ -83,6 +87,14 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
 
   fem::CoupledDriver driver(study, options);  // FEM model first: the DEM server's idle clock is not running yet
   reduction.finish();
+  // Started beside the DEM server (demfem run), the reduction overlapped its deposition: wait until it serves.
+  while (!o.wait_for.empty() && !std::filesystem::exists(o.wait_for)) {
+    if (const int signal = g_stop_signal) {
+      std::signal(signal, SIG_DFL);
+      std::raise(signal);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   coupled.emplace("coupled run", !o.quiet);
   adapter::RemoteProxy dem(remote);
   fem::CoupledRunSummary summary;
@@ -140,6 +152,8 @@ void addFemRunCommand(CLI::App& app) {
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Write a coupled checkpoint every N FEM steps")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
+  cmd->add_option("--wait-for", o->wait_for,
+                  "Build the FEM model, then wait until this file exists before connecting (the DEM server's endpoint file)");
   cmd->add_flag("--quiet", o->quiet, "No progress output");
   std::string& json = addJsonOption(*cmd);
   cmd->callback([o, &json] { runCoupledCommand(*o, json); });

@@ -2,6 +2,7 @@
 // the paper's procedures (Section 2.10); calibrated study, report, plots (docs/calibration.md).
 #include "analysis_options.hpp"
 #include "commands.hpp"
+#include "soil_model_options.hpp"
 
 #include "demfem/campaign/calibration.hpp"
 #include "demfem/cli/backend_registry.hpp"
@@ -26,6 +27,7 @@ struct CalibrateOptions {
   std::vector<std::string> fits;
   std::string preset;
   campaign::CalibrationOptions calibration;
+  SoilModelOptions soil;
   bool quiet = false;
 };
 
@@ -58,6 +60,9 @@ void run(CalibrateOptions& o, const std::string& json_target) {
   c.objective.analysis = o.analysis.settings;
   c.objective.soil_deformation = study.kind != study::StudyKind::DemOnly && study.tools.front().fem.deformable;
   c.kind = study.kind == study::StudyKind::WeightDrop ? campaign::ObjectiveKind::Smooth : campaign::ObjectiveKind::Noisy;
+  if (c.kind == campaign::ObjectiveKind::Noisy) campaign::useNoisySteps(c);
+  c.stroke_ends_with_window = !o.soil.full_stroke;
+  c.model_seeds = o.soil.model_seeds;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
   Progress progress("calibrate", !o.quiet);
   c.on_progress = [&progress](const campaign::CalibrationProgress& p) {
@@ -69,7 +74,8 @@ void run(CalibrateOptions& o, const std::string& json_target) {
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   c.stop_requested = [] { return g_stop.load(); };
-  const auto model = campaign::makeModel(study);
+  useSoilDirectory(o.soil, c.cache_dir);
+  const auto model = campaign::makeModel(study, o.soil.force, o.soil.shared_packing);
   const auto result = campaign::calibrateStages(study_json, o.study_file, recordings, stages, *model, c);
   progress.finish();
 
@@ -112,6 +118,7 @@ void addCalibrateCommand(CLI::App& app) {
   cmd->add_option("--relative-floor", o->calibration.objective.relative_floor, "Smallest scatter, relative to the measured value")
       ->check(CLI::Range(1e-9, 1.0))
       ->capture_default_str();
+  addSoilModelOptions(*cmd, o->soil);
   cmd->add_flag("--quiet", o->quiet, "No progress on stderr");
   addAnalysisOptions(*cmd, o->analysis);
   std::string& json_target = addJsonOption(*cmd);

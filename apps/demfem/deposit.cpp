@@ -69,7 +69,7 @@ void addDepositCommand(CLI::App& app) {
                   "the study's only if its soil.deposition.backend names the same backend")
       ->check(CLI::IsMember({"builtin", "liggghts"}));
   cmd->add_option("--soil-dir", opt->soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
-  cmd->add_option("--threads", opt->threads, "OpenMP threads of the built-in deposition (default: the study's /dem/threads)")
+  cmd->add_option("--threads", opt->threads, "threads of the built-in deposition (default: the study's /dem/threads)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--force", opt->force, "Deposit again even if the file exists");
   cmd->add_flag("--quiet", opt->quiet, "No progress output");

@@ -2,6 +2,7 @@
 // the catalogue, the model extended by it and the held-out gain (docs/diagnosis.md).
 #include "analysis_options.hpp"
 #include "commands.hpp"
+#include "soil_model_options.hpp"
 
 #include "demfem/campaign/diagnose.hpp"
 #include "demfem/cli/backend_registry.hpp"
@@ -23,6 +24,8 @@ struct DiagnoseOptions {
   std::string study_file;
   std::vector<std::string> recordings;
   campaign::DiagnosisSettings settings;
+  SoilModelOptions soil;
+  bool x_tolerance_given = false;
   bool quiet = false;
 };
 
@@ -41,6 +44,9 @@ void run(DiagnoseOptions& o, const std::string& json_target) {
   c.objective.analysis = o.analysis.settings;
   c.objective.soil_deformation = study.kind != study::StudyKind::DemOnly && study.tools.front().fem.deformable;
   c.kind = study.kind == study::StudyKind::WeightDrop ? campaign::ObjectiveKind::Smooth : campaign::ObjectiveKind::Noisy;
+  if (c.kind == campaign::ObjectiveKind::Noisy && !o.x_tolerance_given) campaign::useNoisySteps(c);
+  c.stroke_ends_with_window = !o.soil.full_stroke;
+  c.model_seeds = o.soil.model_seeds;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
   const auto start = std::chrono::steady_clock::now();
   if (!o.quiet)
@@ -51,7 +57,8 @@ void run(DiagnoseOptions& o, const std::string& json_target) {
   std::signal(SIGINT, onDiagnoseStop);
   std::signal(SIGTERM, onDiagnoseStop);
   c.stop_requested = [] { return g_stop.load(); };
-  const auto model = campaign::makeModel(study);
+  useSoilDirectory(o.soil, c.cache_dir);
+  const auto model = campaign::makeModel(study, o.soil.force, o.soil.shared_packing);
   const campaign::Diagnosis d = campaign::diagnose(study_json, o.study_file, recordings, *model, o.settings);
 
   analysis::StagedOutput out(o.analysis.out_dir);
@@ -95,14 +102,18 @@ void addDiagnoseCommand(CLI::App& app) {
   cmd->add_option("--max-evaluations", s.calibration.max_evaluations, "Objective evaluations per start")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--x-tolerance", s.calibration.x_tolerance, "Optimiser tolerance, as a fraction of each parameter's bounds")
-      ->check(CLI::Range(1e-9, 0.1))
-      ->capture_default_str();
+  auto* x_tolerance = cmd->add_option("--x-tolerance", s.calibration.x_tolerance,
+                                      "Optimiser tolerance, as a fraction of each parameter's bounds (soil: "
+                                      "the noisy-objective step, docs/calibration.md)")
+                          ->check(CLI::Range(1e-9, 0.1))
+                          ->capture_default_str();
   cmd->add_option("--jobs", s.calibration.jobs, "Cases run concurrently")->check(CLI::PositiveNumber)->capture_default_str();
+  addSoilModelOptions(*cmd, o->soil);
   cmd->add_flag("--quiet", o->quiet, "No progress on stderr");
   addAnalysisOptions(*cmd, o->analysis);
   std::string& json_target = addJsonOption(*cmd);
-  cmd->callback([o, &json_target] {
+  cmd->callback([o, &json_target, x_tolerance] {
+    o->x_tolerance_given = x_tolerance->count() > 0;
     try {
       runAnalysis([&] { run(*o, json_target); });
     } catch (const campaign::ArgumentError& e) {

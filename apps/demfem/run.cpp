@@ -223,17 +223,9 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   }
   Child dem("demfem-dem", dem_args);
 
-  // The DEM server binds after building its backend (deposition may take a while): wait for it.
-  while (!fs::exists(endpoint_file)) {
-    if (const int sig = g_forward_signal) {
-      dem.stop(5s);
-      endBySignal(sig, work);
-    }
-    if (dem.poll()) throw std::runtime_error("demfem-dem stopped before serving (" + dem.outcome() + ")");
-    std::this_thread::sleep_for(20ms);
-  }
-
-  std::vector<std::string> fem_args{fem_exe.string(), "run", o.study_file, "--connect", endpoint};
+  // The FEM client starts at once: its keypoint reduction overlaps the DEM's deposition, and it
+  // connects when the DEM server has written its endpoint file.
+  std::vector<std::string> fem_args{fem_exe.string(), "run", o.study_file, "--connect", endpoint, "--wait-for", endpoint_file.string()};
   if (!o.output_dir.empty()) fem_args.insert(fem_args.end(), {"--output", o.output_dir});
   if (o.steps > 0) fem_args.insert(fem_args.end(), {"--steps", std::to_string(o.steps)});
   if (o.checkpoint_every > 0) fem_args.insert(fem_args.end(), {"--checkpoint-every", std::to_string(o.checkpoint_every)});
@@ -241,6 +233,24 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   if (o.quiet) fem_args.push_back("--quiet");
   if (!json_target.empty()) fem_args.insert(fem_args.end(), {"--json", json_target});
   Child fem("demfem-fem", fem_args);
+
+  // The DEM server binds after building its backend (deposition may take a while): wait for it.
+  while (!fs::exists(endpoint_file)) {
+    if (const int sig = g_forward_signal) {
+      fem.stop(5s);
+      dem.stop(5s);
+      endBySignal(sig, work);
+    }
+    if (dem.poll()) {
+      fem.stop(5s);
+      throw std::runtime_error("demfem-dem stopped before serving (" + dem.outcome() + ")");
+    }
+    if (fem.poll()) {
+      dem.stop(5s);
+      throw std::runtime_error("demfem-fem stopped before the DEM served (" + fem.outcome() + "; see its message above)");
+    }
+    std::this_thread::sleep_for(20ms);
+  }
 
   int forwarded = 0;
   for (;;) {
@@ -279,7 +289,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
   cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (outputs then marked incomplete)")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);
-  cmd->add_option("--threads", o->threads, "OpenMP threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
+  cmd->add_option("--threads", o->threads, "threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");

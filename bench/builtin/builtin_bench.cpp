@@ -10,9 +10,13 @@
 // the contact model and time step), with the DEM step at a tenth of the model's stiffest-spring
 // critical step, the same step the drag is timed with, settled to a total kinetic energy of 1e-3 J
 // (--settle-J: timing needs a bin at rest, not a study's 1e-6 J, which the soft EDEM spring never
-// reaches within the deposition's time cap). The tool is inserted to its depth (untimed),
-// then each thread count is timed over the same number of drag steps from that state. Prints a
-// table; --json FILE writes the figures (units in the keys).
+// reaches within the deposition's time cap). The tool is inserted to its depth (untimed), then
+// every thread count is timed over the same number of drag steps from that same state, in
+// interleaved rounds (1 2 1 2 ...: a machine shared with other work slows all counts alike), with
+// the process CPU time beside the wall time. With --compete each count is also timed beside a
+// competing busy process (one more runnable process than the 2 cores hold), which is where a
+// spinning thread team collapses. Prints a table of every timing and the medians and ratios per
+// round; --json FILE writes the figures (units in the keys) with the load average before and after.
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
@@ -22,13 +26,20 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -62,6 +73,44 @@ DemSimulation makeBin(const study::Study& st, const std::vector<ParticleState>& 
   return sim;
 }
 
+// A busy process beside the timed run (stopped and reaped by its destructor).
+class Competitor {
+ public:
+  Competitor() : pid_(::fork()) {
+    if (pid_ < 0) throw std::runtime_error("--compete: fork failed");
+    if (pid_ == 0) {
+      volatile double x = 1;
+      for (;;) x = x * 1.0000001 + 1e-9;
+    }
+  }
+  Competitor(const Competitor&) = delete;
+  Competitor& operator=(const Competitor&) = delete;
+  ~Competitor() {
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+  }
+
+ private:
+  pid_t pid_;
+};
+
+double loadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double one = std::nan("");
+  in >> one;
+  return one;
+}
+
+struct Timing {
+  double wall_s = 0, cpu_s = 0, rate = 0;
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -79,6 +128,10 @@ int main(int argc, char** argv) {
   app.add_option("--settle-J", settle_J,
                  "Kinetic energy (J) below which the benchmark soil counts as settled")
       ->check(CLI::PositiveNumber);
+  int rounds = 3;
+  app.add_option("--rounds", rounds, "Interleaved rounds: every thread count once per round")->check(CLI::PositiveNumber);
+  bool compete = false;
+  app.add_flag("--compete", compete, "Also time every thread count beside a competing busy process");
   std::vector<std::string> only;
   app.add_option("--model", only, "Time only these models (labels as printed; default: all)");
   std::string& json_target = cli::addJsonOption(app);
@@ -105,14 +158,19 @@ int main(int argc, char** argv) {
                                        {"hooke+history+cdt", hooke},
                                        {"hooke/hysteresis+sjkr+epsd", luding}};
 
-    nlohmann::json report{{"study", study_file}, {"steps", steps}, {"cases", nlohmann::json::array()}};
+    nlohmann::json report{{"study", study_file},
+                          {"steps", steps},
+                          {"rounds", rounds},
+                          {"load_average_1min_start", loadAverage()},
+                          {"cases", nlohmann::json::array()},
+                          {"summary", nlohmann::json::array()}};
     const bool text = json_target != "-";
     if (text)
       std::printf("tool at %.0f mm depth moving at %.2f mm/s, %ld steps per case, each model on its own settled bin\n\n",
                   tool.motion.depth_m * 1e3, tool.motion.velocity_m_s * 1e3, steps);
     if (text)
-      std::printf("%-42s %9s %7s %11s %9s %9s %16s %10s %9s\n", "model", "particles", "threads", "dt_s", "wall_s", "cpu_s",
-                  "particle_steps/s", "bytes/part", "contacts");
+      std::printf("%-42s %9s %7s %8s %5s %11s %9s %9s %16s %10s %9s\n", "model", "particles", "threads", "compete",
+                  "round", "dt_s", "wall_s", "cpu_s", "particle_steps/s", "bytes/part", "contacts");
     for (const auto& label : only)
       if (std::none_of(cases.begin(), cases.end(), [&](const ModelCase& c) { return c.label == label; }))
         throw cli::InputError("--model: unknown model '" + label + "'");
@@ -153,31 +211,69 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < sim.particleCount(); ++i) states.push_back(sim.particle(i));
         origin = sim.mesh(m).offset(sim.time());
       }
-      for (const int threads : thread_counts) {
-        DemSimulation sim = makeBin(st, states, threads, origin);
-        sim.setTimeStep(studyTimeStep(sim, st.dem));
-        sim.run(10);  // lists and first forces outside the timing
-        const auto t0 = std::chrono::steady_clock::now();
-        const std::clock_t c0 = std::clock();
-        sim.run(steps);
-        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        // Process CPU time of all threads: on a shared machine wall time includes waiting for a core.
-        const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-        const double rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / wall;
+      // Interleaved rounds: every (threads, competitor) variant once per round, the same soil state.
+      std::vector<std::pair<int, bool>> variants;
+      for (const bool with_competitor : compete ? std::vector<bool>{false, true} : std::vector<bool>{false})
+        for (const int threads : thread_counts) variants.emplace_back(threads, with_competitor);
+      std::map<std::pair<int, bool>, std::vector<Timing>> timings;
+      for (int round = 0; round < rounds; ++round)
+        for (const auto& [threads, with_competitor] : variants) {
+          DemSimulation sim = makeBin(st, states, threads, origin);
+          sim.setTimeStep(studyTimeStep(sim, st.dem));
+          sim.run(10);  // lists and first forces outside the timing
+          std::unique_ptr<Competitor> competitor;
+          if (with_competitor) competitor = std::make_unique<Competitor>();
+          const auto t0 = std::chrono::steady_clock::now();
+          const std::clock_t c0 = std::clock();
+          sim.run(steps);
+          Timing t;
+          t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          // Process CPU time of all threads (the competitor is another process): on a shared
+          // machine wall time also counts the waiting for a core.
+          t.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+          competitor.reset();
+          t.rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
+          timings[{threads, with_competitor}].push_back(t);
+          if (text)
+            std::printf("%-42s %9zu %7d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(),
+                        threads, with_competitor ? "yes" : "no", round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate,
+                        sim.bytesPerParticle(), sim.contactCount());
+          report["cases"].push_back({{"model", c.label},
+                                     {"particles", sim.particleCount()},
+                                     {"threads", threads},
+                                     {"competing_process", with_competitor},
+                                     {"round", round + 1},
+                                     {"dt_s", sim.timeStep()},
+                                     {"wall_s", t.wall_s},
+                                     {"cpu_s", t.cpu_s},
+                                     {"particle_steps_per_s", t.rate},
+                                     {"bytes_per_particle", sim.bytesPerParticle()},
+                                     {"contacts", sim.contactCount()}});
+        }
+      // Per variant: median rate; against 1 thread of the same round (and competitor setting): the
+      // ratio per round, its median and its smallest value.
+      for (const auto& [variant, list] : timings) {
+        const auto& base = timings[{thread_counts.front(), variant.second}];
+        std::vector<double> rates, ratios;
+        for (std::size_t r = 0; r < list.size(); ++r) {
+          rates.push_back(list[r].rate);
+          ratios.push_back(list[r].rate / base[r].rate);
+        }
+        const double med = median(rates), ratio = median(ratios), worst = *std::min_element(ratios.begin(), ratios.end());
         if (text)
-          std::printf("%-42s %9zu %7d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(), threads, sim.timeStep(), wall,
-                      cpu, rate, sim.bytesPerParticle(), sim.contactCount());
-        report["cases"].push_back({{"model", c.label},
-                                   {"particles", sim.particleCount()},
-                                   {"threads", threads},
-                                   {"dt_s", sim.timeStep()},
-                                   {"wall_s", wall},
-                                   {"cpu_s", cpu},
-                                   {"particle_steps_per_s", rate},
-                                   {"bytes_per_particle", sim.bytesPerParticle()},
-                                   {"contacts", sim.contactCount()}});
+          std::printf("%s, %d thread(s)%s: median %.3e particle-steps/s; over %d thread(s) in the same round: median %.2fx, "
+                      "lowest %.2fx\n",
+                      c.label.c_str(), variant.first, variant.second ? " beside a competing process" : "", med,
+                      thread_counts.front(), ratio, worst);
+        report["summary"].push_back({{"model", c.label},
+                                     {"threads", variant.first},
+                                     {"competing_process", variant.second},
+                                     {"median_particle_steps_per_s", med},
+                                     {"median_ratio_to_first_thread_count", ratio},
+                                     {"lowest_ratio_to_first_thread_count", worst}});
       }
     }
+    report["load_average_1min_end"] = loadAverage();
     cli::writeJson(json_target, report);
   });
   return cli::runApp(app, argc, argv);

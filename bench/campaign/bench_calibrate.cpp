@@ -2,11 +2,11 @@
 // the first (modal re-use, campaign/model.hpp) and of the whole `--preset weight-drop` calibration of
 // the paper's PMMA tool, on recordings the model itself made at known E and alpha with DAQ noise.
 // Prints a table; --json writes the same numbers.
-#include "demfem/analysis/synthetic.hpp"
 #include "demfem/campaign/calibration.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/weight_drop.hpp"
+#include "truth_recordings.hpp"
 
 #include <unistd.h>
 
@@ -14,13 +14,13 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <random>
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 using namespace demfem;
+using bench::weight;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -28,35 +28,6 @@ nlohmann::ordered_json readJson(const fs::path& file) {
   std::ifstream in(file);
   if (!in) throw std::runtime_error("cannot read " + file.string());
   return nlohmann::ordered_json::parse(in);
-}
-
-analysis::CaseKey weight(double mass_kg) { return {analysis::CaseKind::CalibrationWeight, "PMMA", 0, mass_kg}; }
-
-// Raw recordings of the model at the true values: 0.2 s at rest, 0.3 % white noise, DAQ quanta.
-void writeTruth(const nlohmann::ordered_json& truth, const std::string& origin, const fs::path& dir) {
-  campaign::WeightDropModel model;
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> normal(0, 1);
-  for (double mass : {0.5, 1.0}) {
-    const analysis::Recording r = model.run(campaign::caseStudy(truth, origin, weight(mass)), weight(mass), {});
-    for (int repeat = 1; repeat <= 2; ++repeat) {
-      analysis::SyntheticRecording rec;
-      rec.header = {"t", "force", "deformation"};
-      rec.columns.assign(3, {});
-      const double force_unit = 0.01, deformation_unit = 1e-3, noise = 0.003;
-      const double force_scale = r.force.back(), deformation_scale = r.deformation.back();
-      for (std::size_t i = 0; i < r.size(); ++i) {
-        rec.columns[0].push_back(r.time_s[i] + 0.1);
-        rec.columns[1].push_back(std::round((r.force[i] + noise * force_scale * normal(rng)) / force_unit));
-        rec.columns[2].push_back(std::round((r.deformation[i] + noise * deformation_scale * normal(rng)) / deformation_unit));
-      }
-      rec.sidecar = {{"tool", "PMMA"},   {"mass_kg", mass},           {"sample_rate_hz", 1000.0}, {"force_factor", force_unit},
-                     {"repeat", repeat}, {"deformation_factor", deformation_unit}};
-      char name[64];
-      std::snprintf(name, sizeof name, "pmma_%gkg_r%d.csv", mass, repeat);
-      analysis::writeSyntheticRecording(rec, dir / name);
-    }
-  }
 }
 
 }  // namespace
@@ -79,7 +50,7 @@ int main(int argc, char** argv) {
     truth["tools"][0]["fem"]["alpha_s"] = alpha_true;
     const fs::path dir = fs::temp_directory_path() / ("demfem-bench-calibrate-" + std::to_string(getpid()));
     fs::create_directories(dir);
-    writeTruth(truth, study_file, dir);
+    bench::writeTruth(truth, study_file, dir);
     const auto recordings = analysis::readRecordings({dir});
     fs::remove_all(dir);
 

@@ -2,7 +2,7 @@
 // backend-neutral soil file both read, deposited once per seed by the study's deposition backend).
 // - Speed (default): the study's soil and first tool with plain hooke, tangential history and cdt
 //   rolling friction, the same calls on both backends: particle-steps per second on 1 and 2 cores
-//   (built-in: OpenMP threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean draught
+//   (built-in: threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean draught
 //   force over the same drag window with its scatter over the seeds. Deposition and insertion are
 //   not timed.
 // - --coupled: the study as it is (contact laws included), run coupled with the FEM client
@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -45,6 +46,7 @@ struct RunResult {
   std::int64_t particles = 0;
   std::int64_t steps = 0;
   double wall_s = 0;
+  double cpu_s = std::numeric_limits<double>::quiet_NaN();  // speed runs: CPU time of the timed window: the built-in DEM's process (all threads), LIGGGHTS' rank 0
   double draught_N = 0;  // mean force on the tool against the drag (-z), over the window
   double load_cell_N = std::numeric_limits<double>::quiet_NaN();  // coupled: mean load-cell force of the drag
   double surface_mm = std::numeric_limits<double>::quiet_NaN();  // soilSurface() of the run's soil
@@ -53,7 +55,7 @@ struct RunResult {
 
 nlohmann::json toJson(const RunResult& r) {
   return {{"backend", r.backend},     {"cores", r.cores},        {"seed", r.seed},
-          {"particles", r.particles}, {"steps", r.steps},        {"wall_s", r.wall_s},
+          {"particles", r.particles}, {"steps", r.steps},        {"wall_s", r.wall_s},        {"cpu_s", r.cpu_s},
           {"draught_N", r.draught_N}, {"load_cell_N", r.load_cell_N}, {"particle_steps_per_s", r.particleStepsPerSecond()},
           {"surface_mm", r.surface_mm}};
 }
@@ -62,6 +64,7 @@ RunResult fromJson(const nlohmann::json& j) {
   RunResult r;
   r.backend = j.at("backend"), r.cores = j.at("cores"), r.seed = j.at("seed"), r.particles = j.at("particles");
   r.steps = j.at("steps"), r.wall_s = j.at("wall_s");
+  if (!j.at("cpu_s").is_null()) r.cpu_s = j.at("cpu_s");
   // NaN (no drag interval, no coupled run) is written as null.
   r.draught_N = j.at("draught_N").is_null() ? std::nan("") : j.at("draught_N").get<double>();
   if (!j.at("load_cell_N").is_null()) r.load_cell_N = j.at("load_cell_N");
@@ -125,12 +128,14 @@ RunResult drag(adapter::CouplingApi& dem, const study::Study& s, double window_s
   RunResult r;
   r.particles = particles;
   const auto start = Clock::now();
+  const std::clock_t cpu_start = std::clock();
   for (long i = 0; i < intervals; ++i) {
     dem.simulate(interval);
     const auto f = dem.nodeForces(tool.name, adapter::ForceMode::IntervalMean);
     for (std::size_t k = 2; k < f.size(); k += 3) r.draught_N -= f[k];
   }
   r.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  r.cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   r.draught_N /= static_cast<double>(intervals);
   r.steps = std::llround((dem.time() - t0) / dem.info().dem_time_step_s);
   return r;
@@ -322,15 +327,15 @@ int main(int argc, char** argv) {
     }
     const bool text = json_target != "-";
     if (text)
-      std::printf("%-9s %5s %5s %9s %10s %8s %9s %14s %11s %11s\n", "backend", "cores", "seed", "particles",
-                  "surface_mm", "steps", "wall_s", "particle-st/s", "draught_N", "load_cell_N");
+      std::printf("%-9s %5s %5s %9s %10s %8s %9s %9s %14s %11s %11s\n", "backend", "cores", "seed", "particles",
+                  "surface_mm", "steps", "wall_s", "cpu_s", "particle-st/s", "draught_N", "load_cell_N");
     std::vector<RunResult> runs;
     auto record = [&runs, text](const RunResult& r) {  // one row as soon as a run ends: runs are long
       runs.push_back(r);
       if (!text) return;
-      std::printf("%-9s %5d %5llu %9lld %10.2f %8lld %9.2f %14.3e %11.4f %11.4f\n", r.backend.c_str(), r.cores,
+      std::printf("%-9s %5d %5llu %9lld %10.2f %8lld %9.2f %9.2f %14.3e %11.4f %11.4f\n", r.backend.c_str(), r.cores,
                   static_cast<unsigned long long>(r.seed), static_cast<long long>(r.particles), r.surface_mm,
-                  static_cast<long long>(r.steps), r.wall_s, r.particleStepsPerSecond(), r.draught_N, r.load_cell_N);
+                  static_cast<long long>(r.steps), r.wall_s, r.cpu_s, r.particleStepsPerSecond(), r.draught_N, r.load_cell_N);
       std::fflush(stdout);
     };
     // The soil's own backend runs first on each seed: its construction deposits the soil file.

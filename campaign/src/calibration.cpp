@@ -1,5 +1,6 @@
 #include "demfem/campaign/calibration.hpp"
 
+#include "demfem/adapter/coupling_api.hpp"
 #include "demfem/campaign/run_cache.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -62,6 +63,7 @@ class Evaluator {
     if (options_.stop_requested && options_.stop_requested()) throw Interrupted("calibration interrupted (finished runs are kept in the run cache)");
     Evaluation e;
     e.runs = runAll(withValues(study_, specs_, values));
+    std::erase_if(e.runs, [](const analysis::Recording& r) { return r.size() == 0; });  // failed runs: quantities missing
     e.residuals = residuals(measured_, quantities(e.runs, options_.objective, true));
     e.chi2 = chi2(e.residuals);
     ++evaluations_;
@@ -72,23 +74,53 @@ class Evaluator {
   int evaluations() const { return evaluations_; }
   int modelRuns() const { return model_runs_; }
   int cacheHits() const { return cache_hits_; }
+  int failedRuns() const { return failed_runs_; }
   const std::vector<ParameterSpec>& specs() const { return specs_; }
 
  private:
+  // The study of each model seed: the study itself, or with model_seeds > 1 for a soil study its
+  // deposition seeds s0 .. s0 + model_seeds - 1 (s0 the study's).
+  std::vector<nlohmann::ordered_json> seedVariants(const nlohmann::ordered_json& study) const {
+    if (options_.model_seeds <= 1 || !study.contains("soil")) return {study};
+    const auto seed = nlohmann::ordered_json::json_pointer("/soil/deposition/seed");
+    const std::uint64_t s0 = study.contains(seed) ? study.at(seed).get<std::uint64_t>() : 1;
+    std::vector<nlohmann::ordered_json> out;
+    for (int k = 0; k < options_.model_seeds; ++k) {
+      out.push_back(study);
+      out.back()[seed] = s0 + static_cast<std::uint64_t>(k);
+    }
+    return out;
+  }
+
+  // Every case at every model seed; the runs of one case are pooled like measured repeats.
   std::vector<analysis::Recording> runAll(const nlohmann::ordered_json& study) {
-    std::vector<analysis::Recording> out(cases_.size());
-    std::vector<std::exception_ptr> errors(cases_.size());
+    const std::vector<nlohmann::ordered_json> variants = seedVariants(study);
+    std::vector<std::pair<const nlohmann::ordered_json*, const analysis::CaseKey*>> items;
+    for (const auto& key : cases_)
+      for (const auto& v : variants) items.emplace_back(&v, &key);
+    std::vector<study::Study> to_run;
+    for (const auto& [v, key] : items)
+      if (study::Study s = studyOf(*v, *key); !cache_ || !cache_->find(model_.name(), s, *key)) to_run.push_back(std::move(s));
+    if (!to_run.empty()) model_.prepare(to_run);
+    std::vector<analysis::Recording> out(items.size());
+    std::vector<std::exception_ptr> errors(items.size());
     std::atomic<std::size_t> next{0};
     const auto worker = [&] {
-      for (std::size_t i; (i = next++) < cases_.size();) {
+      for (std::size_t i; (i = next++) < items.size();) {
         try {
-          out[i] = runCase(study, cases_[i]);
+          out[i] = runCase(*items[i].first, *items[i].second);
+          out[i].repeat = static_cast<int>(i % variants.size()) + 1;  // the model seed's repeat number
+        } catch (const adapter::CouplingError& e) {
+          // A DEM run that failed (a blow-up at an extreme parameter value) scores like a run that
+          // cannot be evaluated (objective.hpp); other errors stop the calibration.
+          if (e.code() != adapter::ErrorCode::SimulationFailed) errors[i] = std::current_exception();
+          else ++failed_runs_;
         } catch (...) {
           errors[i] = std::current_exception();
         }
       }
     };
-    const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(std::max(1, options_.jobs)), cases_.size());
+    const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(std::max(1, options_.jobs)), items.size());
     std::vector<std::thread> pool;
     for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
     worker();
@@ -98,8 +130,13 @@ class Evaluator {
     return out;
   }
 
+  study::Study studyOf(const nlohmann::ordered_json& study_json, const analysis::CaseKey& key) const {
+    return caseStudy(study_json, origin_, key,
+                     options_.stroke_ends_with_window ? std::optional(options_.objective.analysis.evaluation.window_end_mm) : std::nullopt);
+  }
+
   analysis::Recording runCase(const nlohmann::ordered_json& study_json, const analysis::CaseKey& key) {
-    const study::Study study = caseStudy(study_json, origin_, key);
+    const study::Study study = studyOf(study_json, key);
     if (cache_)
       if (auto hit = cache_->find(model_.name(), study, key)) {
         ++cache_hits_;
@@ -126,7 +163,7 @@ class Evaluator {
   fs::path scratch_;
   std::mutex mutex_;
   std::map<std::vector<double>, Evaluation> memo_;
-  std::atomic<int> evaluations_{0}, model_runs_{0}, cache_hits_{0};
+  std::atomic<int> evaluations_{0}, model_runs_{0}, cache_hits_{0}, failed_runs_{0};
 };
 
 std::vector<double> valuesOf(const std::vector<ParameterSpec>& specs, const std::vector<double>& x) {
@@ -328,6 +365,7 @@ CalibrationResult calibrate(const CalibrationProblem& problem, Model& model, con
   result.evaluations = evaluator.evaluations();
   result.model_runs = evaluator.modelRuns();
   result.cache_hits = evaluator.cacheHits();
+  result.failed_runs = evaluator.failedRuns();
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - begin).count();
   return result;
 }

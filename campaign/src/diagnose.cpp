@@ -55,13 +55,14 @@ std::vector<const Cause*> candidates(const std::vector<analysis::Recording>& rec
 }
 
 struct FoldOutcome {
-  bool identified = true;
-  std::string unidentified;  // "E_Pa without the 0.5 kg case"
+  std::vector<std::string> unidentified;         // per fold that could not identify the extension
+  std::vector<analysis::CaseKey> held_out_cases;  // the folds that identified every parameter
   std::vector<Residual> held_out;
   int model_runs = 0;
 };
 
-// Leave one case out: fit on the others, predict the one.
+// Leave one case out: fit on the others, predict the one. A fold whose fit leaves a parameter
+// unidentified predicts nothing (a layer only the held-out depth reaches) and is listed.
 FoldOutcome crossValidate(const Extension& e, const std::string& id, const std::string& origin,
                           const std::vector<analysis::Recording>& recordings, Model& model, const DiagnosisSettings& settings) {
   FoldOutcome out;
@@ -73,16 +74,22 @@ FoldOutcome crossValidate(const Extension& e, const std::string& id, const std::
     for (const auto& r : recordings) (r.key == cases[f] ? test : problem.recordings).push_back(r);
     const CalibrationResult fit = calibrate(problem, model, settings.calibration);
     out.model_runs += fit.model_runs;
-    for (const FittedParameter& p : fit.parameters)
-      if (!p.identified) {
-        out.identified = false;
-        out.unidentified = p.spec.label() + " without the case " + cases[f].title();
-        return out;
-      }
+    const auto unidentified = std::find_if(fit.parameters.begin(), fit.parameters.end(), [](const FittedParameter& p) { return !p.identified; });
+    if (unidentified != fit.parameters.end()) {
+      out.unidentified.push_back(unidentified->spec.label() + " without the case " + cases[f].title());
+      continue;
+    }
     const auto residuals = predict(fit.calibrated_study, origin, test, model, settings.calibration);
     out.held_out.insert(out.held_out.end(), residuals.begin(), residuals.end());
+    out.held_out_cases.push_back(cases[f]);
   }
   return out;
+}
+
+std::string joined(const std::vector<std::string>& parts) {
+  std::string s;
+  for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
+  return s;
 }
 
 CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json& study, const std::string& origin,
@@ -111,19 +118,26 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
   r.runs = all.calibrated_runs;
   r.chi2 = all.chi2;
   r.model_runs = folds.model_runs + all.model_runs;
-  r.held_out = cases.size() >= 2 && folds.identified;
-  r.split = r.held_out ? "leave one case out (" + std::to_string(cases.size()) + " folds)"
-            : cases.size() < 2 ? "one case only: ranked on all cases (in-sample)"
-                               : "a split cannot identify " + folds.unidentified + ": ranked on all cases (in-sample)";
-  std::vector<Residual> before;
-  for (const Residual& b : base.baseline_residuals)
-    if (b.key.kind == cause.domain) before.push_back(b);
+  r.held_out = !folds.held_out_cases.empty();
+  const std::string folds_used = std::to_string(folds.held_out_cases.size()) + " of " + std::to_string(cases.size()) + " folds";
+  r.split = !r.held_out && cases.size() < 2 ? "one case only: ranked on all cases (in-sample)"
+            : !r.held_out ? "no split can identify the extension (" + joined(folds.unidentified) + "): ranked on all cases (in-sample)"
+            : folds.unidentified.empty()
+                ? "leave one case out (" + std::to_string(cases.size()) + " folds)"
+                : "leave one case out, " + folds_used + " (a split cannot identify " + joined(folds.unidentified) + ")";
+  std::vector<Residual> before, before_all;
+  for (const Residual& b : base.baseline_residuals) {
+    if (b.key.kind != cause.domain) continue;
+    before_all.push_back(b);
+    if (!r.held_out || std::find(folds.held_out_cases.begin(), folds.held_out_cases.end(), b.key) != folds.held_out_cases.end())
+      before.push_back(b);
+  }
   r.error_before_percent = errorPercent(before);
   r.error_after_percent = errorPercent(r.held_out ? folds.held_out : all.residuals);
   r.gain_percent = r.error_before_percent > 0 ? 100 * (r.error_before_percent - r.error_after_percent) / r.error_before_percent : 0.0;
   const double n = static_cast<double>(all.residuals.size());
   r.bic = r.chi2 + static_cast<double>(e.parameters.size()) * std::log(n);
-  r.delta_bic = r.bic - chi2(before);
+  r.delta_bic = r.bic - chi2(before_all);
   r.wall_time_s = secondsSince(start);
   return r;
 }
@@ -194,7 +208,10 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   d.measured = recordings;
   const std::vector<const Cause*> causes = candidates(recordings, settings);
   if (settings.on_stage) settings.on_stage("baseline prediction");
-  d.baseline_residuals = predict(study, origin, recordings, model, settings.calibration, &d.baseline_runs);
+  // The baseline runs the whole stroke: the end-of-stroke signature compares like with like.
+  CalibrationOptions whole_stroke = settings.calibration;
+  whole_stroke.stroke_ends_with_window = false;
+  d.baseline_residuals = predict(study, origin, recordings, model, whole_stroke, &d.baseline_runs);
   d.baseline_error_percent = errorPercent(d.baseline_residuals);
   d.baseline_chi2 = chi2(d.baseline_residuals);
   d.residual_count = static_cast<int>(d.baseline_residuals.size());

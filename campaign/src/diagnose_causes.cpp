@@ -261,7 +261,9 @@ Cause layeredSoil() {
   Cause c;
   c.id = "layered_soil";
   c.domain = analysis::CaseKind::SoilBin;
-  c.description = "depth-dependent soil strength: static friction per layer (Section 2.10.2), layers split at the recordings' depths";
+  c.description =
+      "depth-dependent soil strength: static friction per layer (Section 2.10.2), layers split at the recordings' depths but the "
+      "two deepest";
   c.expected_signature = "a draught bias that changes with depth";
   c.match = [](const Signatures& s, const SignatureTolerance& t) {
     if (s.soil_bins.size() < 2 || !s.force_bias_per_depth_percent_per_mm) return noSoil();
@@ -270,7 +272,11 @@ Cause layeredSoil() {
   };
   c.extend = [id = c.id](const ordered_json& study, const std::vector<double>& depths_mm) {
     soilOf(study, id);
-    const ordered_json extended = splitLayers(study, depths_mm);
+    // The deepest depth shares the layer of the next shallower one (as the paper's 42 mm runs share
+    // the 30 mm layer): a fit that leaves it out still predicts it. Two depths: split at the shallower.
+    std::vector<double> cuts(depths_mm.begin(), depths_mm.end() - std::min<std::ptrdiff_t>(2, std::ssize(depths_mm)));
+    if (cuts.empty() && !depths_mm.empty()) cuts.push_back(depths_mm.front());
+    const ordered_json extended = splitLayers(study, cuts);
     Extension e{extended, {}};
     for (const std::string& m : reachedLayers(extended.at("soil"), depths_mm))
       if (auto i = interactionOf(extended.at("soil"), m, m))

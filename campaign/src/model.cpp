@@ -1,10 +1,15 @@
 #include "demfem/campaign/model.hpp"
 
+#include "demfem/adapter/settled_soil.hpp"
+#include "demfem/adapter/tool_drive.hpp"
 #include "demfem/backends/builtin/backend.hpp"
+#include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/campaign/parameters.hpp"
 #include "demfem/fem/coupled_driver.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <cmath>
+#include <set>
 
 namespace demfem::campaign {
 namespace {
@@ -15,7 +20,8 @@ std::string kindName(const nlohmann::ordered_json& study_json) {
 
 }  // namespace
 
-study::Study caseStudy(const nlohmann::ordered_json& study_json, const std::string& origin, const analysis::CaseKey& key) {
+study::Study caseStudy(const nlohmann::ordered_json& study_json, const std::string& origin, const analysis::CaseKey& key,
+                       std::optional<double> stroke_end_mm) {
   nlohmann::ordered_json derived = study_json;
   const std::string kind = kindName(study_json);
   switch (key.kind) {
@@ -30,6 +36,8 @@ study::Study caseStudy(const nlohmann::ordered_json& study_json, const std::stri
         throw ArgumentError("recording case '" + key.title() + "': a soil-bin case needs a coupled or dem-only study, " + origin +
                             " is of kind " + kind);
       derived["tools"][0]["motion"]["depth_mm"] = key.depth_mm;
+      if (stroke_end_mm && study::parseStudy(derived.dump(), origin).tools.front().motion.stroke_m * 1000 > *stroke_end_mm)
+        derived["tools"][0]["motion"]["stroke_mm"] = *stroke_end_mm;
       break;
   }
   return study::parseStudy(derived.dump(), origin);
@@ -48,24 +56,103 @@ analysis::CaseKey studyCase(const study::Study& study) {
   return key;
 }
 
-analysis::Recording SoilBinModel::run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) {
+namespace {
+
+// The coupled run's sensors.csv (force_N = the load cell).
+analysis::Recording loadCellRun(const study::Study& study, const std::filesystem::path& scratch) {
   fem::CoupledRunOptions options;
   options.output_dir = scratch;
   fem::CoupledDriver driver(study, options);
   const std::unique_ptr<adapter::CouplingApi> dem = builtin::makeBackend(study);
   driver.run(*dem);
-  analysis::Recording recording = analysis::readRecording(scratch / "sensors.csv");
+  return analysis::readRecording(scratch / "sensors.csv");
+}
+
+// The rigid tool driven through its plan by the DEM alone; force_N = the draught per FEM step.
+analysis::Recording draughtRun(const study::Study& study) {
+  const study::Tool& tool = study.tools.front();
+  if (study.kind != study::StudyKind::DemOnly && tool.fem.deformable)
+    throw ArgumentError("--soil-force draught: tool '" + tool.name + "' is deformable; the draught is the force on a rigid tool (a dem-only study)");
+  const study::ToolMotionPlan plan = study::planToolMotion(study, tool);
+  const std::unique_ptr<adapter::CouplingApi> dem = builtin::makeBackend(study);
+  adapter::insertAndStartDrag(*dem, study, tool);
+  analysis::Recording r;
+  r.format = analysis::RecordingFormat::Calibrated;
+  const double speed_mm_s = std::hypot(plan.drag.velocity_m_s[0], plan.drag.velocity_m_s[1], plan.drag.velocity_m_s[2]) * 1000;
+  for (std::int64_t k = 1; k <= plan.drag_steps; ++k) {
+    dem->simulate(plan.dt_s);
+    const adapter::NodeArray f = dem->nodeForces(tool.name, adapter::ForceMode::IntervalMean);
+    double draught_N = 0;
+    for (std::size_t i = 2; i < f.size(); i += 3) draught_N -= f[i];
+    const double t_s = static_cast<double>(k) * plan.dt_s;
+    r.time_s.push_back(t_s);
+    r.force.push_back(draught_N);
+    r.deformation.push_back(0.0);
+    r.displacement_mm.push_back(speed_mm_s * t_s);
+    r.line.push_back(static_cast<std::size_t>(k) + 1);
+  }
+  return r;
+}
+
+}  // namespace
+
+analysis::Recording SoilBinModel::run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) {
+  prepareSoil(study);
+  analysis::Recording recording;
+  switch (force_) {
+    case SoilForce::LoadCell: recording = loadCellRun(study, scratch); break;
+    case SoilForce::Draught: recording = draughtRun(study); break;
+  }
   recording.key = key;
   return recording;
 }
 
-std::unique_ptr<Model> makeModel(const study::Study& study) {
+std::string SoilBinModel::name() const {
+  const std::string packing = packing_ ? "-packing-" + study::soilHash(*packing_) : "";
+  switch (force_) {
+    case SoilForce::LoadCell: return "coupled-builtin-1" + packing;
+    case SoilForce::Draught: return "dem-draught-builtin-1" + packing;
+  }
+  return {};
+}
+
+void SoilBinModel::prepare(const std::vector<study::Study>& case_studies) {
+  std::set<std::string> done;
+  for (const study::Study& s : case_studies)
+    if (done.insert(study::soilHash(s)).second) prepareSoil(s);
+}
+
+void SoilBinModel::prepareSoil(const study::Study& s) const {
+  const auto dir = adapter::defaultSoilDirectory();
+  const auto file = adapter::settledSoilFile(s, dir);
+  if (std::filesystem::exists(file)) return;
+  if (!packing_) {
+    builtin::makeBackend(s);  // deposits the soil and writes its file (backend.hpp)
+    return;
+  }
+  study::Study reference = *packing_;
+  reference.soil.deposition_seed = s.soil.deposition_seed;
+  const auto& a = reference.soil;
+  const auto& b = s.soil;
+  if (a.bin_length_m != b.bin_length_m || a.bin_width_m != b.bin_width_m || a.fill_height_m != b.fill_height_m ||
+      a.diameter_min_m != b.diameter_min_m || a.diameter_max_m != b.diameter_max_m)
+    throw ArgumentError("shared soil packing: study '" + s.name + "' changes the bin, fill height or particle sizes of '" + reference.name +
+                        "', whose deposition it would reuse");
+  const auto reference_file = adapter::settledSoilFile(reference, dir);
+  if (!std::filesystem::exists(reference_file)) builtin::makeBackend(reference);  // deposits and writes it
+  adapter::SettledSoil soil = adapter::readSettledSoil(reference_file, reference);
+  soil.soil_hash = study::soilHash(s);
+  for (auto& p : soil.particles) p.layer = builtin::layerAt(s.soil, p.x_m[1]);
+  adapter::writeSettledSoil(file, soil);
+}
+
+std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force, bool shared_packing) {
   switch (study.kind) {
     case study::StudyKind::WeightDrop:
       return std::make_unique<WeightDropModel>();
     case study::StudyKind::Coupled:
     case study::StudyKind::DemOnly:
-      return std::make_unique<SoilBinModel>();
+      return std::make_unique<SoilBinModel>(soil_force, shared_packing ? std::optional(study) : std::nullopt);
     case study::StudyKind::ConePenetration:
     case study::StudyKind::FemOnly:
       break;

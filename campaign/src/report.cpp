@@ -47,6 +47,7 @@ nlohmann::json stageJson(const Stage& stage, const CalibrationResult& r) {
           {"unique", r.minima.size() == 1},
           {"evaluations", r.evaluations},
           {"model_runs", r.model_runs},
+          {"failed_runs", r.failed_runs},
           {"cache_hits", r.cache_hits},
           {"wall_time_s", r.wall_time_s}};
 }
@@ -103,7 +104,8 @@ std::string stageReport(const Stage& stage, const CalibrationResult& r, const st
       s += "\n";
     }
   }
-  s += "\nModel runs " + std::to_string(r.model_runs) + " (cache hits " + std::to_string(r.cache_hits) + "), objective evaluations " +
+  s += "\nModel runs " + std::to_string(r.model_runs) + " (cache hits " + std::to_string(r.cache_hits) + ", failed DEM runs " +
+       std::to_string(r.failed_runs) + "), objective evaluations " +
        std::to_string(r.evaluations) + ", wall time " + number(r.wall_time_s) + " s.\n\n" + residualTable(r.initial_residuals, r.residuals);
   for (const auto& p : plots) s += "\n![" + p + "](" + p + ")\n";
   return s + "\n";

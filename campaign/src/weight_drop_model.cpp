@@ -2,20 +2,22 @@
 // model, so that a change of E, alpha or beta costs one scalar recursion per mode (model.hpp).
 //
 // With Phi the M-normalized modes of (K_r, M_r + weight) on the free DOFs, u = Phi q + u_res. Eq (4)
-// keeps the modes uncoupled, and Eq (5) projected on mode j is the scalar three-level recursion
-//   q+ (1/dt^2 + c/(2 dt) + w^2/3) = g_bar + q (2/dt^2 - w^2/3) + q- (-1/dt^2 + c/(2 dt) - w^2/3),
-// c = alpha w^2 + beta, g_bar the mean of the modal force over the three levels. The load-cell force
-// follows Eq (10) on the fixed DOFs, projected on the load-cell sum. The modes kept are the lowest
-// kModes; the others answer the step load quasi-statically (static correction u_res = K^-1 f -
-// sum_j phi_j g_j / w_j^2, present from the first step), which keeps the static solution exact.
+// keeps the modes uncoupled and Eq (5) becomes one scalar three-level recursion per mode; the
+// load-cell force follows Eq (10) on the fixed DOFs, projected on the load-cell sum (both
+// fem::ModalRecursion, fem/modal.hpp). The modes kept are the lowest kModes; the others answer the
+// step load quasi-statically (static correction u_res = K^-1 f - sum_j phi_j g_j / w_j^2, present
+// from the first step), which keeps the static solution exact.
 // Scaling: K_r = (E / E_ref) K_r,ref, so w^2, the load-cell stiffness terms and 1/u_res scale by
 // E / E_ref while the mode shapes stay. A compliant clamp (fem/model.hpp) adds springs S on keypoint
-// DOFs, which the reduction leaves untouched and which are proportional to k_theta: the reduction
-// is kept per clamp layout, K_r = (E / E_ref) (K_ref - S_ref) + (k_theta / k_ref) S_ref is set
-// exactly for each E and k_theta, and the basis is then per (E, k_theta). Sensor gains scale the
+// DOFs, which the reduction leaves untouched and which are proportional to k_theta:
+// K_r = (E / E_ref) (K_ref - S_ref) + (k_theta / k_ref) S_ref. The reduction is kept per clamp
+// layout and, per weight, a fem::SpringRitzBasis (the modes at the first E and k_theta plus the static
+// responses to unit forces on the spring DOFs) gives the modes of every (E, k_theta) from a small
+// eigen problem and the exact static solution by the Woodbury identity. Sensor gains scale the
 // outputs only, so they change neither the reduction nor the basis.
 #include "demfem/campaign/model.hpp"
 
+#include "demfem/fem/modal.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/sensors.hpp"
 #include "demfem/fem/weight_drop.hpp"
@@ -130,15 +132,21 @@ fem::ReducedModel modelOf(const Reduction& reduction, const study::Tool& tool) {
   return model;
 }
 
-Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study::WeightDrop& drop) {
-  const std::vector<int> pan = panDofs(reduction.model, drop);
-  const auto n = static_cast<double>(pan.size());
-  Eigen::VectorXd load = Eigen::VectorXd::Zero(reduction.model.dofCount());
-  for (int dof : pan) load(dof) = -drop.mass_kg * fem::kStandardGravity_m_s2 / n;  // as fem::simulateWeightDrop
-  fem::ReducedModel loaded = modelOf(reduction, tool);
-  fem::addLumpedMass(loaded, pan, drop.mass_kg / n);
-  const int free_count = static_cast<int>(loaded.freeDofs().size());
-  const fem::Modes modes = fem::naturalModes(loaded, std::min(kModes, free_count / 2));
+Eigen::VectorXd weightLoad(const fem::ReducedModel& model, const std::vector<int>& pan, const study::WeightDrop& drop) {
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(model.dofCount());
+  for (int dof : pan) load(dof) = -drop.mass_kg * fem::kStandardGravity_m_s2 / static_cast<double>(pan.size());  // as fem::simulateWeightDrop
+  return load;
+}
+
+// The reduced model with the weight's mass lumped on the pan rows (Section 2.10.1).
+fem::ReducedModel loadedModel(fem::ReducedModel model, const std::vector<int>& pan, const study::WeightDrop& drop) {
+  fem::addLumpedMass(model, pan, drop.mass_kg / static_cast<double>(pan.size()));
+  return model;
+}
+
+// The modal description of the weight's load on `loaded` from its modes and its exact static solution.
+Basis basisOf(const fem::ReducedModel& loaded, const study::Tool& tool, const fem::Modes& modes, const fem::StaticSolution& exact,
+              const Eigen::VectorXd& load) {
   study::Tool ideal = tool;
   ideal.sensors = {};  // gains are applied to the outputs (integrate)
   const fem::Sensors sensors(loaded, ideal);
@@ -152,7 +160,6 @@ Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study
   }
   const Eigen::RowVectorXd cell_K = cell.transpose() * loaded.K, cell_M = cell.transpose() * loaded.M;
   Basis b;
-  const fem::StaticSolution exact = fem::solveStatic(loaded, load);
   const fem::SensorReadings exact_reading = sensors.read(exact.displacement, exact.reaction);
   b.residual_deformation_mm = exact_reading.deformation_mm;
   b.residual_force_N = exact_reading.load_cell_N;
@@ -171,48 +178,48 @@ Basis makeBasis(const Reduction& reduction, const study::Tool& tool, const study
   return b;
 }
 
-// Eq (5) and (10) per mode for the step load; returns the recording's columns.
+int modeCount(const fem::ReducedModel& model) { return std::min(kModes, static_cast<int>(model.freeDofs().size()) / 2); }
+
+// Rigid clamp: the modes of the loaded reduction at E_ref (E enters by scaling, integrate()).
+Basis rigidBasis(const Reduction& reduction, const study::Tool& tool, const study::WeightDrop& drop) {
+  const std::vector<int> pan = panDofs(reduction.model, drop);
+  const fem::ReducedModel loaded = loadedModel(reduction.model, pan, drop);
+  const Eigen::VectorXd load = weightLoad(loaded, pan, drop);
+  return basisOf(loaded, tool, fem::naturalModes(loaded, modeCount(loaded)), fem::solveStatic(loaded, load), load);
+}
+
+// Compliant clamp: the modes at the tool's E and k_theta from the weight's spring Ritz basis.
+Basis sprungBasis(const Reduction& reduction, const fem::SpringRitzBasis& ritz, const study::Tool& tool, const study::WeightDrop& drop) {
+  const std::vector<int> pan = panDofs(reduction.model, drop);
+  const fem::ReducedModel loaded = loadedModel(modelOf(reduction, tool), pan, drop);
+  const Eigen::VectorXd load = weightLoad(loaded, pan, drop);
+  const double e = tool.fem.youngs_Pa / reduction.E_ref_Pa;
+  const double s = *tool.constraints.clamp_rotational_stiffness_Nm_per_rad / reduction.k_ref_Nm_per_rad;
+  return basisOf(loaded, tool, ritz.modes(e, s, modeCount(loaded)), ritz.solveStatic(e, s, load), load);
+}
+
+// Eq (5) and (10) per mode for the step load (fem::ModalRecursion); returns the recording's columns.
 analysis::Recording integrate(const Basis& b, double scale, const study::Tool& tool, double dt, long steps) {
   analysis::Recording rec;
   rec.format = analysis::RecordingFormat::Calibrated;
   const auto lead_in = static_cast<long>(std::llround(kLeadIn_s / dt));
   for (long i = 0; i < lead_in; ++i) rec.time_s.push_back(static_cast<double>(i) * dt), rec.force.push_back(0), rec.deformation.push_back(0);
   const double t0 = static_cast<double>(lead_in) * dt;
-  const std::size_t modes = b.omega2.size();
-  std::vector<double> q(modes, 0.0), q_prev(modes, 0.0);
-  std::vector<double> a1(modes), a2(modes), a3(modes), l1(modes), l2(modes), l3(modes);
-  const double dt2 = dt * dt;
-  for (std::size_t j = 0; j < modes; ++j) {
-    const double w2 = scale * b.omega2[j], k = scale * b.cell_stiffness[j], m = b.cell_mass[j];
-    const double c = tool.fem.alpha_s * w2 + tool.fem.beta_per_s;          // Eq (4), modal
-    const double ck = tool.fem.alpha_s * k + tool.fem.beta_per_s * m;      // c^T C phi_j
-    a1[j] = 1 / dt2 + c / (2 * dt) + w2 / 3;                               // Eq (6)
-    a2[j] = 2 / dt2 - w2 / 3;                                              // Eq (7)
-    a3[j] = -1 / dt2 + c / (2 * dt) - w2 / 3;                              // Eq (8)
-    l1[j] = m / dt2 + ck / (2 * dt) + k / 3;
-    l2[j] = 2 * m / dt2 - k / 3;
-    l3[j] = -m / dt2 + ck / (2 * dt) - k / 3;
-  }
+  const auto modes = static_cast<Eigen::Index>(b.omega2.size());
+  const Eigen::Map<const Eigen::ArrayXd> omega2(b.omega2.data(), modes);
+  const Eigen::Map<const Eigen::RowVectorXd> cell_stiffness(b.cell_stiffness.data(), modes), cell_mass(b.cell_mass.data(), modes);
+  const Eigen::Map<const Eigen::VectorXd> modal_force(b.modal_force.data(), modes), deformation_per_q(b.deformation.data(), modes);
+  const fem::ModalRecursion recursion(scale * omega2, scale * cell_stiffness, cell_mass, {tool.fem.alpha_s, tool.fem.beta_per_s}, dt);
+  fem::ModalRecursion::State state = recursion.atRest(Eigen::VectorXd::Zero(modes));
   rec.time_s.push_back(t0), rec.force.push_back(0), rec.deformation.push_back(0);
-  double cell = 0, cell_prev = 0;  // modal part of the load-cell force at levels i, i-1 (Eq 10)
   const double residual_deformation = b.residual_deformation_mm / scale;
   for (long i = 1; i <= steps; ++i) {
     // Mean modal force of levels i, i-1, i-2: the weight hangs from level 1 on.
     const double levels = static_cast<double>(std::min<long>(i, 3)) / 3;
-    double deformation = residual_deformation, cell_sum = 0;
-    for (std::size_t j = 0; j < modes; ++j) {
-      const double q_next = (levels * b.modal_force[j] + a2[j] * q[j] + a3[j] * q_prev[j]) / a1[j];  // Eq (9)
-      cell_sum += l1[j] * q_next - l2[j] * q[j] - l3[j] * q_prev[j];
-      q_prev[j] = q[j];
-      q[j] = q_next;
-      deformation += b.deformation[j] * q_next;
-    }
-    const double cell_next = 3 * cell_sum - cell - cell_prev;  // Eq (10)
-    cell_prev = cell;
-    cell = cell_next;
+    recursion.step(levels * modal_force, state);
     rec.time_s.push_back(t0 + static_cast<double>(i) * dt);
-    rec.force.push_back((cell + b.residual_force_N) * tool.sensors.force_gain);
-    rec.deformation.push_back(deformation * tool.sensors.deformation_gain);
+    rec.force.push_back((state.reaction(0) + b.residual_force_N) * tool.sensors.force_gain);
+    rec.deformation.push_back((residual_deformation + deformation_per_q.dot(state.q)) * tool.sensors.deformation_gain);
   }
   return rec;
 }
@@ -221,13 +228,14 @@ analysis::Recording integrate(const Basis& b, double scale, const study::Tool& t
 
 struct WeightDropModel::Impl {
   OnceMap<Reduction> reductions;
+  OnceMap<fem::SpringRitzBasis> ritz;  // per clamp layout and weight
   OnceMap<Basis> bases;
 };
 
 WeightDropModel::WeightDropModel() : impl_(std::make_unique<Impl>()) {}
 WeightDropModel::~WeightDropModel() = default;
 
-int WeightDropModel::basesBuilt() const { return impl_->reductions.size() + impl_->bases.size(); }
+int WeightDropModel::basesBuilt() const { return impl_->reductions.size() + impl_->ritz.size() + impl_->bases.size(); }
 
 analysis::Recording WeightDropModel::run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path&) {
   if (!study.weight_drop) throw std::invalid_argument("weight-drop model: study '" + study.name + "' has no /weight_drop");
@@ -238,9 +246,18 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
   const auto reduction = impl_->reductions.get(tool_key, [&] {
     return Reduction{fem::reduce(fem::buildFullModel(tool)), tool.fem.youngs_Pa, clamp.value_or(0.0)};
   });
-  std::string basis_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
-  if (clamp) basis_key += "|" + nlohmann::json(tool.fem.youngs_Pa).dump() + "|" + nlohmann::json(*clamp).dump();
-  const auto basis = impl_->bases.get(basis_key, [&] { return makeBasis(*reduction, tool, drop); });
+  const std::string weight_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
+  std::shared_ptr<const Basis> basis;
+  if (clamp) {
+    const auto ritz = impl_->ritz.get(weight_key, [&] {
+      const fem::ReducedModel loaded = loadedModel(reduction->model, panDofs(reduction->model, drop), drop);
+      return fem::SpringRitzBasis(loaded, modeCount(loaded));
+    });
+    const std::string key_of_values = weight_key + "|" + nlohmann::json(tool.fem.youngs_Pa).dump() + "|" + nlohmann::json(*clamp).dump();
+    basis = impl_->bases.get(key_of_values, [&] { return sprungBasis(*reduction, *ritz, tool, drop); });
+  } else {
+    basis = impl_->bases.get(weight_key, [&] { return rigidBasis(*reduction, tool, drop); });
+  }
   const auto steps = static_cast<long>(std::llround(drop.duration_s / study.fem.dt_s));
   const double scale = clamp ? 1.0 : tool.fem.youngs_Pa / reduction->E_ref_Pa;  // a sprung basis is at the tool's E
   analysis::Recording rec = integrate(*basis, scale, tool, study.fem.dt_s, steps);

@@ -2,7 +2,7 @@
 
 #include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/tool_drive.hpp"
-#include "demfem/fem/integrator.hpp"
+#include "demfem/fem/modal.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/sensors.hpp"
 #include "demfem/study/tool_motion.hpp"
@@ -27,7 +27,7 @@ using adapter::NodeArray;
 
 namespace {
 
-constexpr char kCheckpointMagic[] = "demfem-coupled-fem-state-2";
+constexpr char kCheckpointMagic[] = "demfem-coupled-fem-state-3";
 
 std::string number(double v) {
   char text[32];
@@ -75,11 +75,13 @@ void writeVector(std::ostream& out, const Eigen::VectorXd& v) {
   out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(n * sizeof(double)));
 }
 
-Eigen::VectorXd readVector(std::istream& in, std::int64_t expected) {
+// A vector written by writeVector; its size is checked by the integrator that restores it.
+Eigen::VectorXd readVector(std::istream& in) {
+  constexpr std::uint64_t kMaxEntries = std::uint64_t{1} << 32;
   std::uint64_t n = 0;
   in.read(reinterpret_cast<char*>(&n), sizeof n);
-  if (!in || n != static_cast<std::uint64_t>(expected)) throw std::runtime_error("checkpoint vector size differs from the model");
-  Eigen::VectorXd v(expected);
+  if (!in || n > kMaxEntries) throw std::runtime_error("checkpoint vector size is not readable");
+  Eigen::VectorXd v(static_cast<Eigen::Index>(n));
   in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(double)));
   return v;
 }
@@ -207,7 +209,7 @@ struct CoupledDriver::Impl {
       load_cell_influence_ = loadCellInfluence(*model_);
       return;
     }
-    integrator_ = std::make_unique<ThreeLevelIntegrator>(*model_, dt_, RayleighDamping{tool_.fem.alpha_s, tool_.fem.beta_per_s});
+    integrator_ = makeIntegrator(*model_, dt_, RayleighDamping{tool_.fem.alpha_s, tool_.fem.beta_per_s}, study_.fem.integration);
     sensors_ = std::make_unique<Sensors>(*model_, tool_);
   }
 
@@ -380,9 +382,10 @@ struct CoupledDriver::Impl {
     put(out, s);
     put(out, static_cast<std::uint8_t>(rigid_));
     if (!rigid_) {
-      const IntegratorState& st = integrator_->state();
+      const SavedIntegratorState st = integrator_->save();
       put(out, st.step);
-      for (const auto* v : {&st.u, &st.u_prev, &st.f, &st.f_prev, &st.applied}) writeVector(out, *v);
+      put(out, static_cast<std::uint64_t>(st.vectors.size()));
+      for (const Eigen::VectorXd& v : st.vectors) writeVector(out, v);
     }
     put(out, last_);
     adapter::writeFileAtomically(checkpointDir() / "fem_state.bin", out.str());  // commits the checkpoint
@@ -406,10 +409,16 @@ struct CoupledDriver::Impl {
     if (get<std::uint8_t>(in) != static_cast<std::uint8_t>(rigid_))
       throw std::runtime_error(file.string() + ": checkpoint of a " + (rigid_ ? "deformable" : "rigid") + " tool run");
     if (!rigid_) {
-      IntegratorState st;
+      SavedIntegratorState st;
       st.step = get<std::int64_t>(in);
-      for (auto* v : {&st.u, &st.u_prev, &st.f, &st.f_prev, &st.applied}) *v = readVector(in, 3 * node_count_);
-      integrator_->setState(st);
+      const auto count = get<std::uint64_t>(in);
+      for (std::uint64_t i = 0; in && i < count && i < 64; ++i) st.vectors.push_back(readVector(in));
+      if (!in) throw std::runtime_error(file.string() + " is truncated");
+      try {
+        integrator_->restore(st);
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(file.string() + ": " + e.what());
+      }
     }
     last_ = get<SensorReadings>(in);
     if (!in) throw std::runtime_error(file.string() + " is truncated");
@@ -434,7 +443,7 @@ struct CoupledDriver::Impl {
   NodeArray received_;       // undeformed node positions as the DEM lists them
   std::vector<int> match_;   // DEM node i -> model keypoint
   std::unique_ptr<ReducedModel> model_;
-  std::unique_ptr<ThreeLevelIntegrator> integrator_;
+  std::unique_ptr<TimeIntegrator> integrator_;
   std::unique_ptr<Sensors> sensors_;
   Eigen::VectorXd load_cell_influence_;  // rigid tool: load_cell_N = c . f (model order)
   std::int64_t last_checkpoint_step_ = -1;

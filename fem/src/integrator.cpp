@@ -11,11 +11,10 @@ ThreeLevelIntegrator::ThreeLevelIntegrator(const ReducedModel& model, double dt_
   if (!(dt_s > 0)) throw std::invalid_argument("integrator: dt must be > 0 s (got " + std::to_string(dt_s) + ")");
   if (!(damping.alpha_s >= 0) || !(damping.beta_per_s >= 0))
     throw std::invalid_argument("integrator: Rayleigh alpha (s) and beta (1/s) must be >= 0");
-  const Eigen::MatrixXd C = damping.alpha_s * model.K + damping.beta_per_s * model.M;  // Eq (4)
-  const double dt2 = dt_s * dt_s;
-  A1_ = model.M / dt2 + C / (2 * dt_s) + model.K / 3;   // Eq (6)
-  A2_ = 2 * model.M / dt2 - model.K / 3;                // Eq (7)
-  A3_ = -model.M / dt2 + C / (2 * dt_s) - model.K / 3;  // Eq (8)
+  ThreeLevelTerms<Eigen::MatrixXd> terms = threeLevelTerms(model.M, model.K, damping, dt_s);  // Eq (4), (6)-(8)
+  A1_ = std::move(terms.A1);
+  A2_ = std::move(terms.A2);
+  A3_ = std::move(terms.A3);
   A1_free_.compute(A1_(free_, free_));
   if (A1_free_.info() != Eigen::Success) throw std::invalid_argument("integrator: A1 (Eq 6) is not positive definite on the free DOFs");
   K_ = model.K;
@@ -71,6 +70,15 @@ void ThreeLevelIntegrator::setState(const IntegratorState& state) {
   if (state.u.size() != n || state.u_prev.size() != n || state.f.size() != n || state.f_prev.size() != n || state.applied.size() != n)
     throw std::invalid_argument("integrator setState: state vectors must have " + std::to_string(n) + " entries");
   state_ = state;
+}
+
+SavedIntegratorState ThreeLevelIntegrator::save() const {
+  return {state_.step, {state_.u, state_.u_prev, state_.f, state_.f_prev, state_.applied}};
+}
+
+void ThreeLevelIntegrator::restore(const SavedIntegratorState& saved) {
+  if (saved.vectors.size() != 5) throw std::invalid_argument("integrator restore: not the state of a full (three-level) integration");
+  setState({saved.step, saved.vectors[0], saved.vectors[1], saved.vectors[2], saved.vectors[3], saved.vectors[4]});
 }
 
 double predictedDiscreteFrequency(double omega_rad_s, double dt_s) {

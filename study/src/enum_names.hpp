@@ -41,6 +41,8 @@ inline const NameTable<GeometryKind> kGeometryKinds{{"plate", GeometryKind::Plat
                                                     {"cone", GeometryKind::Cone}};
 inline const NameTable<ElementOrder> kElementOrders{{"linear", ElementOrder::Linear},
                                                     {"quadratic", ElementOrder::Quadratic}};
+inline const NameTable<FemIntegration> kFemIntegrations{{"modal", FemIntegration::Modal},
+                                                         {"full", FemIntegration::Full}};
 inline const NameTable<TimeStepCriterion> kCriteria{{"rayleigh", TimeStepCriterion::Rayleigh},
                                                     {"stiffest-spring", TimeStepCriterion::StiffestSpring}};
 inline const NameTable<ForceAveraging> kForceAveraging{{"interval-mean", ForceAveraging::IntervalMean},

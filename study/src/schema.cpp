@@ -522,7 +522,9 @@ const Section<FemSettings>& femSection() {
   static const Section<FemSettings> s{
       "fem",
       {{"dt_s", &FemSettings::dt_s, Need::Required, closedInterval(kMinFemStep_s, 1.0), {}, always(), {},
-        "Table 3's dt_FEM: the FEM step and coupling interval (force recording interval without FEM)"}}};
+        "Table 3's dt_FEM: the FEM step and coupling interval (force recording interval without FEM)"},
+       {"integration", choice(&FemSettings::integration, kFemIntegrations), Need::Optional, {}, {}, always(), {},
+        "`modal`: the modes the step feels plus a static correction; `full`: Eq (5) on every DOF (docs/fem.md)"}}};
   return s;
 }
 
@@ -537,7 +539,7 @@ const Section<DemSettings>& demSection() {
        {"dt_fraction", &DemSettings::dt_fraction, Need::Required, leftOpen(0.0, 1.0), {}, criterionStep(), {},
         "fraction of the critical step"},
        {"threads", &DemSettings::threads, Need::Optional, {}, {1, kMaxThreads}, always(), "the machine's cores",
-        "OpenMP threads of the built-in DEM (`demfem run --threads N` overrides)"},
+        "threads of the built-in DEM (`demfem run --threads N` overrides)"},
        {"seed", &DemSettings::seed, Need::Optional, {}, kSeed, always(), {},
         "random numbers drawn during the run (the deposition has its own)"}}};
   return s;

@@ -2,6 +2,7 @@
 // free ports chosen by the server). Every wait is bounded.
 #include "demfem/adapter/test_backends.hpp"
 #include "demfem/fem/integrator.hpp"
+#include "demfem/fem/modal.hpp"
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/sensors.hpp"
 #include "demfem/study/study.hpp"
@@ -63,7 +64,9 @@ std::vector<fem::SensorReadings> femAloneHistory(const fs::path& study_file, int
   const study::Study study = study::loadStudy(study_file);
   const auto& tool = study.tools[0];
   const fem::ReducedModel model = fem::reduce(fem::buildFullModel(tool));
-  fem::ThreeLevelIntegrator integrator(model, study.fem.dt_s, {tool.fem.alpha_s, tool.fem.beta_per_s});
+  // The study's integrator (fem.integration), as the FEM client builds it.
+  const auto integrator_ptr = fem::makeIntegrator(model, study.fem.dt_s, {tool.fem.alpha_s, tool.fem.beta_per_s}, study.fem.integration);
+  fem::TimeIntegrator& integrator = *integrator_ptr;
   const fem::Sensors sensors(model, tool);
   adapter::TestLoad load;
   load.force_N = kForceN;

@@ -140,3 +140,26 @@ TEST_CASE("the layered-soil preset fits, depth by depth, the deepest layer the t
                                                       "/materials")) == nlohmann::ordered_json({"layer2", "layer2"}));
   CHECK_THROWS_WITH(campaign::weightDropPreset(study, analysis::readRecordings({dir.path()})), Catch::Matchers::Contains("not weight-drop"));
 }
+
+TEST_CASE("a soil case's stroke is cut to the window's end when the study's is longer, never lengthened", "[campaign]") {
+  const std::filesystem::path file = std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data/tiny_bin.json";
+  std::ifstream in(file);
+  const auto study = nlohmann::ordered_json::parse(in);  // stroke 30 mm
+  const analysis::CaseKey key{analysis::CaseKind::SoilBin, "tool", 12, 0};
+  CHECK(campaign::caseStudy(study, file.string(), key, 20.0).tools[0].motion.stroke_m == Approx(0.020).epsilon(1e-12));
+  CHECK(campaign::caseStudy(study, file.string(), key, 45.0).tools[0].motion.stroke_m == Approx(0.030).epsilon(1e-12));
+  CHECK(campaign::caseStudy(study, file.string(), key).tools[0].motion.stroke_m == Approx(0.030).epsilon(1e-12));
+  CHECK(campaign::caseStudy(study, file.string(), key, 20.0).tools[0].motion.depth_m == Approx(0.012).epsilon(1e-12));
+}
+
+TEST_CASE("the draught model refuses a deformable tool, naming it, before any DEM work", "[campaign]") {
+  const std::filesystem::path file = std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data/tiny_bin.json";
+  std::ifstream in(file);
+  const auto study = nlohmann::ordered_json::parse(in);  // coupled, deformable PMMA tool
+  const analysis::CaseKey key{analysis::CaseKind::SoilBin, "tool", 12, 0};
+  campaign::SoilBinModel model(campaign::SoilForce::Draught);
+  CHECK(model.name() != campaign::SoilBinModel().name());  // the run cache keeps the two forces apart
+  CHECK_THROWS_AS(model.run(campaign::caseStudy(study, file.string(), key), key, {}), campaign::ArgumentError);
+  CHECK_THROWS_WITH(model.run(campaign::caseStudy(study, file.string(), key), key, {}),
+                    Catch::Matchers::Contains("tool 'tool' is deformable") && Catch::Matchers::Contains("dem-only"));
+}

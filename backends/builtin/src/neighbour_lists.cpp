@@ -5,8 +5,6 @@
 
 #include "demfem/backends/physics/dem_assert.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <tuple>
@@ -15,20 +13,13 @@ namespace demfem::builtin {
 
 using detail::norm2;
 
-struct DemSimulation::CellGrid {
-  Vec3 lo;
-  double size = 0;
-  int n[3] = {1, 1, 1};
-  std::vector<std::int32_t> start, items;  // counting-sorted particle ids per cell
-  // Clamped before the conversion: a wall node far outside the grid (a peer may place a mesh
-  // anywhere) or a non-finite one lands in an edge cell instead of overflowing the int.
-  int cellOf(double c, int axis) const {
-    const double k = std::floor((c - lo[axis]) / size);
-    if (!(k > 0)) return 0;
-    return static_cast<int>(std::min(k, static_cast<double>(n[axis] - 1)));
-  }
-  std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; }
-};
+// Clamped before the conversion: a wall node far outside the grid (a peer may place a mesh
+// anywhere) or a non-finite one lands in an edge cell instead of overflowing the int.
+int DemSimulation::CellGrid::cellOf(double c, int axis) const {
+  const double k = std::floor((c - lo[axis]) / size);
+  if (!(k > 0)) return 0;
+  return static_cast<int>(std::min(k, static_cast<double>(n[axis] - 1)));
+}
 
 // Particles are checked in the drift loop of step(); this covers the mesh nodes.
 bool DemSimulation::meshesMovedBeyondSkin() const {
@@ -43,13 +34,49 @@ bool DemSimulation::meshesMovedBeyondSkin() const {
   return false;
 }
 
-void DemSimulation::rebuildLists() {
+// Every thread of the team calls it: the cells and the merge of the rows on thread 0, the rows and
+// the history carry-over on each thread's own particles.
+void DemSimulation::rebuildLists(int tid) {
+  if (tid == 0) buildCellGrid();
+  team_.barrier();
+  buildRows(tid);
+  team_.barrier();
+  if (tid == 0) {
+    const std::size_t n = particleCount();
+    build_j_.clear();
+    for (const auto& t : thread_) build_j_.insert(build_j_.end(), t.rows.begin(), t.rows.end());
+    for (std::size_t i = 0; i < n; ++i) build_start_[i + 1] += build_start_[i];
+  }
+  team_.barrier();
+  carryHistory(tid);
+  team_.barrier();
+  if (tid == 0) {
+    const std::size_t n = particleCount();
+    thread_window_end_.assign(threads_, 0);
+    for (int t = 0; t < threads_; ++t) {
+      std::size_t end = rangeEnd(t);
+      for (std::int32_t s = build_start_[rangeBegin(t)]; s < build_start_[rangeEnd(t)]; ++s)
+        end = std::max(end, static_cast<std::size_t>(build_j_[s]) + 1);
+      thread_window_end_[t] = end;
+    }
+    nb_start_.swap(build_start_);
+    nb_j_.swap(build_j_);
+    DEMFEM_ASSERT(nb_start_.size() == n + 1 && nb_stiff_.size() == nb_j_.size());
+    buildWallCandidates(grid_);
+    x_build_ = x_;
+    mesh_build_nodes_ = mesh_bin_nodes_;
+    lists_valid_ = true;
+  }
+  team_.barrier();
+}
+
+// Cells of edge >= 2 rmax + skin over the particles' bounding box (within the domain).
+void DemSimulation::buildCellGrid() {
   const std::size_t n = particleCount();
   const double rmin = n ? *std::min_element(radius_.begin(), radius_.end()) : 0.0;
   const double rmax = n ? *std::max_element(radius_.begin(), radius_.end()) : 0.0;
   if (skin_ == 0) skin_ = 0.2 * rmin;  // fixed at the first build (part of the saved state)
-  // Cells of edge >= 2 rmax + skin over the particles' bounding box (within the domain).
-  CellGrid g;
+  CellGrid& g = grid_;
   g.size = std::max(2 * rmax + skin_, 1e-6);
   Vec3 hi = domain_.lo;
   g.lo = domain_.hi;
@@ -72,89 +99,73 @@ void DemSimulation::rebuildLists() {
   }
   for (std::size_t c = 0; c < cells; ++c) g.start[c + 1] += g.start[c];
   g.items.resize(n);
-  {
-    std::vector<std::int32_t> fill(g.start.begin(), g.start.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) g.items[fill[cell_of[i]]++] = static_cast<std::int32_t>(i);
-  }
-  buildNeighbourList(g);
-  buildWallCandidates(g);
-  x_build_ = x_;
-  mesh_build_nodes_ = mesh_bin_nodes_;
-  lists_valid_ = true;
+  std::vector<std::int32_t> fill(g.start.begin(), g.start.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) g.items[fill[cell_of[i]]++] = static_cast<std::int32_t>(i);
+  build_start_.assign(n + 1, 0);
 }
 
-void DemSimulation::buildNeighbourList(const CellGrid& g) {
-  const std::size_t n = particleCount();
-  const int T = threads_;
-  std::vector<std::vector<std::int32_t>> rows_j(T);
-  std::vector<std::int32_t> row_len(n, 0);
-#pragma omp parallel num_threads(T)
-  {
-    const int tid = omp_get_thread_num();
-    const std::size_t lo = n * tid / T, hi = n * (tid + 1) / T;
-    auto& out = rows_j[tid];
-    std::vector<std::int32_t> row;
-    for (std::size_t i = lo; i < hi; ++i) {
-      row.clear();
-      const int ci = g.cellOf(x_[3 * i], 0), cj = g.cellOf(x_[3 * i + 1], 1), ck = g.cellOf(x_[3 * i + 2], 2);
-      for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, g.n[2] - 1); ++k)
-        for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, g.n[1] - 1); ++j)
-          for (int ii = std::max(ci - 1, 0); ii <= std::min(ci + 1, g.n[0] - 1); ++ii) {
-            const std::size_t c = g.index(ii, j, k);
-            for (std::int32_t s = g.start[c]; s < g.start[c + 1]; ++s) {
-              const std::int32_t jj = g.items[s];
-              if (static_cast<std::size_t>(jj) <= i) continue;
-              const double d[3] = {x_[3 * i] - x_[3 * jj], x_[3 * i + 1] - x_[3 * jj + 1], x_[3 * i + 2] - x_[3 * jj + 2]};
-              const double cut = radius_[i] + radius_[jj] + skin_;
-              if (norm2(d) < cut * cut) row.push_back(jj);
-            }
+// The sorted neighbours j > i within radius_i + radius_j + skin of the thread's rows i; the row
+// lengths go to build_start_[i + 1] (summed to offsets on thread 0).
+void DemSimulation::buildRows(int tid) {
+  const CellGrid& g = grid_;
+  auto& out = thread_[tid].rows;
+  out.clear();
+  std::vector<std::int32_t> row;
+  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+    row.clear();
+    const int ci = g.cellOf(x_[3 * i], 0), cj = g.cellOf(x_[3 * i + 1], 1), ck = g.cellOf(x_[3 * i + 2], 2);
+    for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, g.n[2] - 1); ++k)
+      for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, g.n[1] - 1); ++j)
+        for (int ii = std::max(ci - 1, 0); ii <= std::min(ci + 1, g.n[0] - 1); ++ii) {
+          const std::size_t c = g.index(ii, j, k);
+          for (std::int32_t s = g.start[c]; s < g.start[c + 1]; ++s) {
+            const std::int32_t jj = g.items[s];
+            if (static_cast<std::size_t>(jj) <= i) continue;
+            const double d[3] = {x_[3 * i] - x_[3 * jj], x_[3 * i + 1] - x_[3 * jj + 1], x_[3 * i + 2] - x_[3 * jj + 2]};
+            const double cut = radius_[i] + radius_[jj] + skin_;
+            if (norm2(d) < cut * cut) row.push_back(jj);
           }
-      std::sort(row.begin(), row.end());
-      row_len[i] = static_cast<std::int32_t>(row.size());
-      out.insert(out.end(), row.begin(), row.end());
-    }
+        }
+    std::sort(row.begin(), row.end());
+    build_start_[i + 1] = static_cast<std::int32_t>(row.size());
+    out.insert(out.end(), row.begin(), row.end());
   }
-  std::vector<std::int32_t> start(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) start[i + 1] = start[i] + row_len[i];
-  std::vector<std::int32_t> nbj;
-  nbj.reserve(start[n]);
-  for (const auto& r : rows_j) nbj.insert(nbj.end(), r.begin(), r.end());
+}
 
-  // Stiffness per slot and history carried over from the old list (rows sorted by j).
+// Stiffness per slot of the new list, and the history of the pairs the old list had (rows sorted
+// by j: one merge per row). Thread 0 sized the new arrays; each thread fills its own rows.
+void DemSimulation::carryHistory(int tid) {
+  const std::size_t n = particleCount();
   const int H = layout_.size;
-  std::vector<ContactStiffness> stiff(nbj.size());
-  std::vector<double> hist(nbj.size() * H, 0.0);
-  std::vector<std::uint8_t> touch(nbj.size(), 0);
+  if (tid == 0) {
+    next_stiff_.assign(build_j_.size(), ContactStiffness{});
+    next_hist_.assign(build_j_.size() * H, 0.0);
+    next_touch_.assign(build_j_.size(), 0);
+  }
+  team_.barrier();
   const bool carry = nb_start_.size() == n + 1;
-#pragma omp parallel for num_threads(T) schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
     std::int32_t o = carry ? nb_start_[i] : 0;
     const std::int32_t oend = carry ? nb_start_[i + 1] : 0;
-    for (std::int32_t s = start[i]; s < start[i + 1]; ++s) {
-      const std::int32_t j = nbj[s];
-      DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < n && (s == start[i] || nbj[s - 1] < j));
+    for (std::int32_t s = build_start_[i]; s < build_start_[i + 1]; ++s) {
+      const std::int32_t j = build_j_[s];
+      DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < n && (s == build_start_[i] || build_j_[s - 1] < j));
       const double ri = radius_[i], rj = radius_[j];
       const double mi = mass_[i], mj = mass_[j];
-      stiff[s] = contactStiffness(model_, table_.law(material_[i], material_[j]), ri * rj / (ri + rj), mi * mj / (mi + mj));
+      next_stiff_[s] = contactStiffness(model_, table_.law(material_[i], material_[j]), ri * rj / (ri + rj), mi * mj / (mi + mj));
       while (o < oend && nb_j_[o] < j) ++o;
       if (o < oend && nb_j_[o] == j) {
-        touch[s] = nb_touch_[o];
-        for (int h = 0; h < H; ++h) hist[static_cast<std::size_t>(s) * H + h] = nb_hist_[static_cast<std::size_t>(o) * H + h];
+        next_touch_[s] = nb_touch_[o];
+        for (int h = 0; h < H; ++h) next_hist_[static_cast<std::size_t>(s) * H + h] = nb_hist_[static_cast<std::size_t>(o) * H + h];
       }
     }
   }
-  thread_window_end_.assign(T, 0);
-  for (int t = 0; t < T; ++t) {
-    const std::size_t lo = n * t / T, hi = n * (t + 1) / T;
-    std::size_t end = hi;
-    for (std::int32_t s = start[lo]; s < start[hi]; ++s) end = std::max(end, static_cast<std::size_t>(nbj[s]) + 1);
-    thread_window_end_[t] = end;
+  team_.barrier();
+  if (tid == 0) {
+    nb_stiff_.swap(next_stiff_);
+    nb_hist_.swap(next_hist_);
+    nb_touch_.swap(next_touch_);
   }
-  nb_start_ = std::move(start);
-  nb_j_ = std::move(nbj);
-  nb_stiff_ = std::move(stiff);
-  nb_hist_ = std::move(hist);
-  nb_touch_ = std::move(touch);
 }
 
 void DemSimulation::buildWallCandidates(const CellGrid& g) {

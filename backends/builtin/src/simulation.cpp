@@ -1,11 +1,9 @@
 // The built-in DEM engine: set-up of particles and walls, the velocity-Verlet step and the state
 // queries. Materials and time step, neighbour lists, pair and wall forces, checkpoints and VTK
-// output live in their own files of this folder.
+// output live in their own files of this folder; the threads in thread_team.hpp.
 #include "demfem/backends/builtin/simulation.hpp"
 
 #include "demfem/backends/physics/dem_assert.hpp"
-
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -28,7 +26,9 @@ DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int 
       model_(soil.contact),
       layout_(HistoryLayout::of(soil.contact)),
       domain_(domain),
-      threads_(std::max(1, threads)) {
+      threads_(std::max(1, threads)),
+      team_(threads_),
+      thread_(threads_) {
   used_.assign(table_.materials.size(), 0);
   if (model_.normal != study::NormalModel::EdemHysteretic)
     for (const auto& m : table_.materials)
@@ -38,11 +38,6 @@ DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int 
     throw std::invalid_argument("builtin DEM: hooke/hysteresis needs coefficient_max_elastic_stiffness > 1");
   for (int c = 0; c < 3; ++c)
     if (!(domain_.hi[c] > domain_.lo[c])) throw std::invalid_argument("builtin DEM: empty domain");
-  if (threads_ > 1) {
-    thread_f_.resize(threads_);
-    thread_t_.resize(threads_);
-  }
-  thread_wall_.resize(threads_);
 }
 
 int DemSimulation::addParticle(const ParticleState& p) {
@@ -181,13 +176,6 @@ void DemSimulation::updateMeshBinNodes() {
   }
 }
 
-// ---------------------------------------------------------------- forces
-
-void DemSimulation::contactForces() {
-  pairForces();
-  wallForces();
-}
-
 // ---------------------------------------------------------------- integration
 
 void DemSimulation::run(long steps) {
@@ -196,25 +184,47 @@ void DemSimulation::run(long steps) {
   for (long s = 0; s < steps; ++s) step();
 }
 
+// Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick, in one run
+// of the team (docs/builtin-dem.md, "Threads on a shared machine"). Each pass over the particles
+// does all it can (the skin check and the force reset ride on the drift, the health check on the
+// second kick). A failure found by any thread stops every thread at the same point; it is raised
+// after the run.
 void DemSimulation::step() {
   const std::size_t n = particleCount();
-  const double half = 0.5 * dt_;
   DEMFEM_ASSERT(x_.size() == 3 * n && v_.size() == 3 * n && w_.size() == 3 * n && f_.size() == 3 * n && t_.size() == 3 * n &&
                 x_build_.size() == 3 * n && inv_mass_.size() == n && inv_inertia_.size() == n);
+  resetFailures();
   if (step_ == 0 || !lists_valid_) {  // forces of the initial state for the first half kick
     updateMeshBinNodes();
-    rebuildLists();
-#pragma omp parallel for num_threads(threads_) schedule(static)
-    for (std::size_t i = 0; i < n; ++i) resetForce(i);
-    contactForces();
+    team_.run([&](int tid) {
+      rebuildLists(tid);
+      for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) resetForce(i);
+      team_.barrier();
+      contactForces(tid);
+    });
+    raiseFailure();
   }
-  // Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick. Each
-  // pass over the particles does all it can (the skin check and the force reset ride on the drift,
-  // the health check on the second kick): one sweep of the arrays and one thread fork per pass.
-  const double lim2 = 0.25 * skin_ * skin_;
-  int moved = 0;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : moved)
-  for (std::size_t i = 0; i < n; ++i) {
+  team_.run([&](int tid) {
+    drift(tid);
+    team_.barrier();
+    if (tid == 0) {
+      time_ += dt_;
+      ++step_;
+      updateMeshBinNodes();
+      rebuild_ = std::any_of(thread_.begin(), thread_.end(), [](const ThreadState& t) { return t.moved; }) ||
+                 meshesMovedBeyondSkin();
+    }
+    team_.barrier();
+    if (rebuild_) rebuildLists(tid);
+    if (contactForces(tid)) kick(tid);
+  });
+  raiseFailure();
+}
+
+void DemSimulation::drift(int tid) {
+  const double half = 0.5 * dt_, lim2 = 0.25 * skin_ * skin_;
+  bool moved = false;
+  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
     double d2 = 0;
     for (int c = 0; c < 3; ++c) {
       v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
@@ -223,17 +233,15 @@ void DemSimulation::step() {
       const double d = x_[3 * i + c] - x_build_[3 * i + c];
       d2 += d * d;
     }
-    if (d2 > lim2) moved = 1;
+    if (d2 > lim2) moved = true;
     resetForce(i);
   }
-  time_ += dt_;
-  ++step_;
-  updateMeshBinNodes();
-  if (moved || meshesMovedBeyondSkin()) rebuildLists();
-  contactForces();
-  std::int64_t bad = std::numeric_limits<std::int64_t>::max();
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(min : bad)
-  for (std::size_t i = 0; i < n; ++i) {
+  thread_[tid].moved = moved;
+}
+
+void DemSimulation::kick(int tid) {
+  const double half = 0.5 * dt_;
+  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
     bool ok = true;
     for (int c = 0; c < 3; ++c) {
       v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
@@ -241,9 +249,61 @@ void DemSimulation::step() {
       ok = ok && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]) && std::isfinite(w_[3 * i + c]);
       ok = ok && x_[3 * i + c] >= domain_.lo[c] && x_[3 * i + c] <= domain_.hi[c];
     }
-    if (!ok) bad = std::min<std::int64_t>(bad, static_cast<std::int64_t>(i));
+    if (!ok && thread_[tid].kick_bad < 0) thread_[tid].kick_bad = static_cast<std::int64_t>(i);
   }
-  if (bad != std::numeric_limits<std::int64_t>::max()) {
+}
+
+// Pair forces, then (unless a pair overlap failed) wall forces; every thread returns the same.
+bool DemSimulation::contactForces(int tid) {
+  pairForces(tid);
+  team_.barrier();
+  const auto failed = [&](std::int64_t ThreadState::*bad) {
+    return std::any_of(thread_.begin(), thread_.end(), [&](const ThreadState& t) { return t.*bad >= 0; });
+  };
+  if (tid == 0)
+    max_overlap_ = std::max_element(thread_.begin(), thread_.end(), [](const ThreadState& a, const ThreadState& b) {
+                     return a.pair_max < b.pair_max;
+                   })->pair_max;
+  if (failed(&ThreadState::pair_bad)) return false;
+  sumPairForces(tid);
+  wallForces(tid);
+  team_.barrier();
+  if (tid == 0) {
+    gatherWallContacts();
+    scatterWallForces();
+    for (const auto& t : thread_) max_overlap_ = std::max(max_overlap_, t.wall_max);
+  }
+  team_.barrier();
+  return !failed(&ThreadState::wall_bad);
+}
+
+void DemSimulation::resetFailures() {
+  for (auto& t : thread_) {
+    t.pair_max = t.wall_max = 0;
+    t.pair_bad = t.wall_bad = t.kick_bad = -1;
+  }
+}
+
+// The first failure in the order the step meets them: a pair overlap, a wall overlap, a particle
+// that is not finite or left the domain (the lowest particle index of each kind).
+void DemSimulation::raiseFailure() const {
+  const auto first = [&](std::int64_t ThreadState::*bad) {
+    for (const auto& t : thread_)
+      if (t.*bad >= 0) return t.*bad;
+    return std::int64_t{-1};
+  };
+  if (const auto i = first(&ThreadState::pair_bad); i >= 0) {
+    std::ostringstream msg;
+    msg << "overlap with a neighbour exceeds " << overlapLimitFraction() << " of the smaller radius (largest overlap "
+        << max_overlap_ * 1e3 << " mm); the time step may be too large for the contact stiffness";
+    fail(static_cast<std::size_t>(i), msg.str());
+  }
+  if (const auto i = first(&ThreadState::wall_bad); i >= 0)
+    fail(static_cast<std::size_t>(i), "overlap with a wall exceeds " + std::to_string(overlapLimitFraction()) + " of its radius");
+  std::int64_t bad = -1;
+  for (const auto& t : thread_)
+    if (t.kick_bad >= 0 && (bad < 0 || t.kick_bad < bad)) bad = t.kick_bad;
+  if (bad >= 0) {
     const std::size_t i = static_cast<std::size_t>(bad);
     bool finite = true;
     for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]);
@@ -314,8 +374,7 @@ std::size_t DemSimulation::bytesPerParticle() const {
         wc_mesh_.capacity() + wc_tri_.capacity() + wall_start_.capacity()) * sizeof(std::int32_t);
   b += nb_stiff_.capacity() * sizeof(ContactStiffness) + nb_hist_.capacity() * sizeof(double) + nb_touch_.capacity();
   b += wall_contacts_.capacity() * sizeof(WallContact);
-  for (const auto& tf : thread_f_) b += tf.capacity() * sizeof(double);
-  for (const auto& tt : thread_t_) b += tt.capacity() * sizeof(double);
+  for (const auto& t : thread_) b += (t.f.capacity() + t.t.capacity()) * sizeof(double);
   return b / n;
 }
 

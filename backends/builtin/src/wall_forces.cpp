@@ -9,8 +9,6 @@
 
 #include "contact_kinematics.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -194,72 +192,60 @@ Vec3 DemSimulation::wallVelocity(const WallTouch& t) const {
   return v;
 }
 
-void DemSimulation::wallForces() {
-  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { wallLoop<N, R>(); });
+void DemSimulation::wallForces(int tid) {
+  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { wallLoop<N, R>(tid); });
 }
 
+// The wall contacts of this thread's particles, in particle order, into its own list; the forces
+// go to the particles at once, the reactions to the walls after the gathering (thread 0).
 template <study::NormalModel N, study::RollingModel R>
-void DemSimulation::wallLoop() {
-  const std::size_t n = particleCount();
-  const int T = threads_;
-  std::vector<double> thread_max(T, 0.0);
-  std::vector<std::int64_t> thread_bad(T, -1);
-#pragma omp parallel num_threads(T)
-  {
-    const int tid = omp_get_thread_num();
-    auto& out = thread_wall_[tid];
-    out.clear();
-    double local_max = 0;
-    std::int64_t bad = -1;
-    WallTouch touch[kMaxWallCandidates];
-    bool accepted[kMaxWallCandidates];
-    int matched_old[kMaxWallCandidates];
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      const int nt = meshTouches(i, touch, planeTouches(i, touch, 0));
-      DEMFEM_ASSERT(nt >= 0 && nt <= kMaxWallCandidates);
-      if (nt == 0) continue;
-      acceptDistinct(touch, nt, static_cast<int>(planes_.size()), radius_[i], accepted);
-      matchHistory(i, touch, nt, accepted, matched_old);
-      for (int a = 0; a < nt; ++a) {
-        if (!accepted[a]) continue;
-        WallContact wc = openWallContact(i, touch[a], matched_old[a]);
-        const Vec3 vwall = wallVelocity(touch[a]);
-        const ContactKinematics k = contactKinematics<true>(touch[a].normal.data(), touch[a].dist, radius_[i], 0,
-                                                            &v_[3 * i], &w_[3 * i], vwall.data(), nullptr);
-        if (k.delta > local_max) local_max = k.delta;
-        if (k.delta > overlapLimitFraction() * radius_[i] && bad < 0) bad = static_cast<std::int64_t>(i);
-        const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wallMaterial(touch[a].wall)),
-                                                     wc.stiffness, k, dt_, layout_.size ? wc.hist : nullptr, true);
-        for (int c = 0; c < 3; ++c) {
-          f_[3 * i + c] += res.force[c];
-          t_[3 * i + c] += res.torque_i[c];
-          wc.force[c] = res.force[c];
-        }
-        out.push_back(wc);
+void DemSimulation::wallLoop(int tid) {
+  ThreadState& ts = thread_[tid];
+  auto& out = ts.wall;
+  out.clear();
+  double local_max = 0;
+  std::int64_t bad = -1;
+  WallTouch touch[kMaxWallCandidates];
+  bool accepted[kMaxWallCandidates];
+  int matched_old[kMaxWallCandidates];
+  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+    const int nt = meshTouches(i, touch, planeTouches(i, touch, 0));
+    DEMFEM_ASSERT(nt >= 0 && nt <= kMaxWallCandidates);
+    if (nt == 0) continue;
+    acceptDistinct(touch, nt, static_cast<int>(planes_.size()), radius_[i], accepted);
+    matchHistory(i, touch, nt, accepted, matched_old);
+    for (int a = 0; a < nt; ++a) {
+      if (!accepted[a]) continue;
+      WallContact wc = openWallContact(i, touch[a], matched_old[a]);
+      const Vec3 vwall = wallVelocity(touch[a]);
+      ContactKinematics k = contactKinematics<true>(touch[a].normal.data(), touch[a].dist, radius_[i], 0,
+                                                    &v_[3 * i], &w_[3 * i], vwall.data(), nullptr);
+      k.wrel_norm = std::sqrt(norm2(k.wrel));
+      if (k.delta > local_max) local_max = k.delta;
+      if (k.delta > overlapLimitFraction() * radius_[i] && bad < 0) bad = static_cast<std::int64_t>(i);
+      const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wallMaterial(touch[a].wall)),
+                                                   wc.stiffness, k, dt_, layout_.size ? wc.hist : nullptr, true);
+      for (int c = 0; c < 3; ++c) {
+        f_[3 * i + c] += res.force[c];
+        t_[3 * i + c] += res.torque_i[c];
+        wc.force[c] = res.force[c];
       }
+      out.push_back(wc);
     }
-    thread_max[tid] = local_max;
-    thread_bad[tid] = bad;
   }
-  gatherWallContacts();
-  scatterWallForces();
-  max_overlap_ = std::max(max_overlap_, *std::max_element(thread_max.begin(), thread_max.end()));
-  for (int t = 0; t < T; ++t)
-    if (thread_bad[t] >= 0)
-      fail(static_cast<std::size_t>(thread_bad[t]),
-           "overlap with a wall exceeds " + std::to_string(overlapLimitFraction()) + " of its radius");
+  ts.wall_max = local_max;
+  ts.wall_bad = bad;
 }
 
-// The threads' contacts in particle order (static schedule: thread blocks are ascending), with
+// The threads' contacts in particle order (the threads' ranges are ascending), with
 // their CSR offsets per particle.
 void DemSimulation::gatherWallContacts() {
   const std::size_t n = particleCount();
   if (threads_ == 1) {
-    wall_contacts_.swap(thread_wall_[0]);  // the old contacts' memory is reused next step
+    wall_contacts_.swap(thread_[0].wall);  // the old contacts' memory is reused next step
   } else {
     wall_contacts_.clear();
-    for (auto& v : thread_wall_) wall_contacts_.insert(wall_contacts_.end(), v.begin(), v.end());
+    for (const auto& t : thread_) wall_contacts_.insert(wall_contacts_.end(), t.wall.begin(), t.wall.end());
   }
   wall_start_.assign(n + 1, 0);
   for (const auto& wc : wall_contacts_) ++wall_start_[wc.particle + 1];

@@ -1,10 +1,14 @@
 // The liggghts backend: LIGGGHTS-PUBLIC 3.8 in-process, one instance per MPI rank (backend.hpp).
-// LIGGGHTS and MPI headers stay in this file (pimpl): nothing of them leaks into our headers.
+// This file: the engine (one rank's part of the simulation), the leader/follower broadcast and the
+// facade; the MPI session, the instance and the settled soil are in session.hpp. LIGGGHTS and MPI
+// headers stay in the .cpp files (pimpl): nothing of them leaks into our headers.
 #include "demfem/backends/liggghts/backend.hpp"
 
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/liggghts/input_deck.hpp"
 #include "demfem/backends/physics/dem_formulas.hpp"
+
+#include "session.hpp"
 
 #include <mpi.h>
 
@@ -24,18 +28,18 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
-#include <fcntl.h>
 #include <unistd.h>
 
 namespace demfem::liggghts {
+
+using namespace detail;
+
 namespace {
 
 using adapter::CouplingError;
@@ -44,40 +48,6 @@ using adapter::ForceMode;
 using adapter::NodeArray;
 using adapter::RigidMotion;
 using Vec3 = std::array<double, 3>;
-
-constexpr double kGravity = 9.81;
-// Deposition: kinetic energy is checked every kSettleCheck_s of simulated time; settling that takes
-// longer than kSettleLimit_s (after the particles had time to fall) is reported as a failure.
-constexpr double kSettleCheck_s = 0.01;
-constexpr double kSettleLimit_s = 20.0;
-
-// A number in a LIGGGHTS command, without loss (std::to_string keeps 6 decimals only).
-std::string exact(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
-}
-
-void finalizeMpi() {
-  int finalized = 0;
-  MPI_Finalized(&finalized);
-  if (!finalized) MPI_Finalize();
-}
-
-// Initialises MPI once per process (singleton when not under mpirun); finalised at exit.
-void ensureMpi() {
-  int initialized = 0;
-  MPI_Initialized(&initialized);
-  if (initialized) return;
-  MPI_Init(nullptr, nullptr);
-  std::atexit(finalizeMpi);
-}
-
-int worldRank() {
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  return rank;
-}
 
 // Gives access to a mesh's node array: MeshMover is a friend of the mesh and hands the array to the
 // movers LIGGGHTS ships. This class moves nothing by itself and is never registered with the mesh
@@ -90,218 +60,6 @@ class NodeArrayAccess : public LAMMPS_NS::MeshMover {
   void initial_integrate(double, double, double) override {}
   double*** nodes() { return get_nodes(); }
 };
-
-// Redirects the process's stderr (file descriptor 2) into a file for its lifetime.
-class StderrToFile {
- public:
-  explicit StderrToFile(const std::filesystem::path& file) {
-    std::fflush(stderr);
-    saved_ = ::dup(2);
-    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (saved_ >= 0 && fd >= 0) ::dup2(fd, 2);
-    if (fd >= 0) ::close(fd);
-  }
-  ~StderrToFile() {
-    std::fflush(stderr);
-    if (saved_ >= 0) {
-      ::dup2(saved_, 2);
-      ::close(saved_);
-    }
-  }
-  StderrToFile(const StderrToFile&) = delete;
-  StderrToFile& operator=(const StderrToFile&) = delete;
-
- private:
-  int saved_ = -1;
-};
-
-// LIGGGHTS reports an input or run-time error by printing it to its screen file and calling exit().
-// While a command runs, this names it and the screen file, so that an exit handler can tell the user
-// what LIGGGHTS said (the screen file is in the work directory, not on the terminal).
-struct CommandInFlight {
-  std::string command;
-  std::filesystem::path screen;
-};
-CommandInFlight* command_in_flight = nullptr;
-
-void reportLiggghtsExit() {
-  if (!command_in_flight) return;
-  std::string message = "LIGGGHTS stopped the process";
-  std::ifstream screen(command_in_flight->screen);
-  for (std::string line; std::getline(screen, line);)
-    if (line.rfind("ERROR", 0) == 0) message = line;
-  std::fprintf(stderr, "demfem liggghts backend: while running `%s`: %s (full output: %s)\n",
-               command_in_flight->command.c_str(), message.c_str(), command_in_flight->screen.c_str());
-}
-
-// One LIGGGHTS instance on MPI_COMM_WORLD; its screen and log go to `<name>-screen.txt` and
-// `<name>.log` in the work directory, never to our stdout (`-screen none` makes LIGGGHTS 3.8 crash
-// when it reads an STL file).
-class Instance {
- public:
-  Instance(const std::filesystem::path& work_dir, const std::string& name)
-      : screen_(work_dir / (name + "-screen.txt")) {
-    const std::string screen = screen_.string();
-    const std::string log = (work_dir / (name + ".log")).string();
-    const char* args[] = {"liggghts", "-echo", "none", "-screen", screen.c_str(), "-log", log.c_str()};
-    // Every instance after the first in a process re-registers LIGGGHTS' contact-model styles and
-    // prints hundreds of "Style collision" warnings to stderr: keep them in the work directory.
-    const StderrToFile quiet(work_dir / (name + "-construction.txt"));
-    lmp_ = new LAMMPS_NS::LAMMPS(7, const_cast<char**>(args), MPI_COMM_WORLD);
-  }
-  ~Instance() { delete lmp_; }
-  Instance(const Instance&) = delete;
-  Instance& operator=(const Instance&) = delete;
-
-  LAMMPS_NS::LAMMPS* get() const { return lmp_; }
-
-  // Runs one input command; if LIGGGHTS exits on it, the exit handler names it.
-  void command(const std::string& line) {
-    static const bool handler_registered = std::atexit(reportLiggghtsExit) == 0;
-    (void)handler_registered;
-    CommandInFlight in_flight{line, screen_};
-    command_in_flight = &in_flight;
-    lmp_->input->one(line.c_str());
-    command_in_flight = nullptr;
-  }
-
-  double computeScalar(const char* id) {
-    return *static_cast<double*>(lammps_extract_compute(lmp_, const_cast<char*>(id), 0, 0));
-  }
-
- private:
-  std::filesystem::path screen_;
-  LAMMPS_NS::LAMMPS* lmp_ = nullptr;
-};
-
-// The settled soil (before the tools clear their space): x, y, z, radius (m) and atom type per
-// particle, kParticleValues doubles each, in the order of their LIGGGHTS ids at the end of the
-// deposition. Every rank holds all of it.
-constexpr std::size_t kParticleValues = 5;
-using SettledParticles = std::vector<double>;
-
-// All particles of an instance, gathered on every rank and ordered by LIGGGHTS id.
-SettledParticles gatherParticles(LAMMPS_NS::LAMMPS* lmp) {
-  const LAMMPS_NS::Atom* atom = lmp->atom;
-  std::vector<double> local;  // id, then the kParticleValues values
-  for (int i = 0; i < atom->nlocal; ++i)
-    local.insert(local.end(), {static_cast<double>(atom->tag[i]), atom->x[i][0], atom->x[i][1], atom->x[i][2],
-                               atom->radius[i], static_cast<double>(atom->type[i])});
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const int local_count = static_cast<int>(local.size());
-  std::vector<int> counts(static_cast<std::size_t>(size)), offsets(static_cast<std::size_t>(size), 0);
-  MPI_Allgather(&local_count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  for (std::size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
-  std::vector<double> all(static_cast<std::size_t>(offsets.back() + counts.back()));
-  MPI_Allgatherv(local.data(), local_count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE,
-                 MPI_COMM_WORLD);
-  constexpr std::size_t stride = kParticleValues + 1;
-  std::vector<std::size_t> order(all.size() / stride);
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&all](std::size_t a, std::size_t b) { return all[stride * a] < all[stride * b]; });
-  SettledParticles particles;
-  particles.reserve(order.size() * kParticleValues);
-  for (const std::size_t i : order)
-    particles.insert(particles.end(), all.begin() + static_cast<std::ptrdiff_t>(stride * i + 1),
-                     all.begin() + static_cast<std::ptrdiff_t>(stride * (i + 1)));
-  return particles;
-}
-
-// Rank 0's status of reading the soil file, broadcast so that every rank takes the same branch.
-enum class SoilFileStatus : int { Missing = 0, Loaded = 1, Damaged = 2 };
-
-std::filesystem::path soilDirectory(const BackendOptions& options) {
-  return options.soil_directory.empty() ? adapter::defaultSoilDirectory() : options.soil_directory;
-}
-
-int worldSize() {
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  return size;
-}
-
-// The layer of a particle LIGGGHTS deposited with atom `type` at height y: the layer covering y if
-// it is of the particle's material, else the nearest layer (in depth) of that material.
-std::int32_t layerOfDeposited(const study::Study& study, int type, double y) {
-  const auto& layers = study.soil.layers;
-  const double depth = study.soil.fill_height_m - y;
-  std::int32_t best = -1;
-  double best_distance = std::numeric_limits<double>::infinity();
-  for (std::size_t l = 0; l < layers.size(); ++l) {
-    if (atomType(study, layers[l].material) != type) continue;
-    const double distance = std::max({0.0, layers[l].top_depth_m - depth, depth - layers[l].bottom_depth_m});
-    if (distance < best_distance) best_distance = distance, best = static_cast<std::int32_t>(l);
-  }
-  if (best < 0) throw CouplingError(ErrorCode::Internal, "deposited particle of atom type " + std::to_string(type) +
-                                                             " matches no layer material");
-  return best;
-}
-
-adapter::SettledSoil toNeutral(const study::Study& study, const SettledParticles& particles) {
-  adapter::SettledSoil soil;
-  for (std::size_t i = 0; i < particles.size(); i += kParticleValues)
-    soil.particles.push_back({{particles[i], particles[i + 1], particles[i + 2]},
-                              particles[i + 3],
-                              layerOfDeposited(study, static_cast<int>(particles[i + 4]), particles[i + 1])});
-  return soil;
-}
-
-SettledParticles fromNeutral(const study::Study& study, const adapter::SettledSoil& soil) {
-  SettledParticles particles;
-  particles.reserve(soil.particles.size() * kParticleValues);
-  for (const auto& p : soil.particles)
-    particles.insert(particles.end(), {p.x_m[0], p.x_m[1], p.x_m[2], p.radius_m,
-                                       static_cast<double>(atomType(study, study.soil.layers[static_cast<std::size_t>(p.layer)].material))});
-  return particles;
-}
-
-// Inserts the layers (deck.deposition) in an instance of its own and lets them settle under gravity
-// until the translational kinetic energy is below soil.settle_kinetic_energy_J (checked every
-// kSettleCheck_s, after twice the fall time, for at most kSettleLimit_s more: then the soil is
-// reported as capped, not settled), then removes the particles above the fill height (deck.trim).
-// Rotational energy is not part of the criterion: a spin about the contact normal is resisted by
-// none of LIGGGHTS' laws here (no torsional friction), so a particle can keep drilling in place while
-// the packing is at rest; the saved state has no spin. Collective.
-adapter::SettledSoil depositInInstance(const study::Study& study, const InputDeck& deck,
-                                       const std::filesystem::path& work_dir) {
-  Instance deposition(work_dir, "deposition");
-  for (const auto& line : deck.setup) deposition.command(line);
-  deposition.command("fix integrate all nve/sphere");
-  for (const auto& line : deck.deposition) deposition.command(line);
-  const double dt = deck.time_step_s;
-  const auto chunk = std::max<long long>(1, std::llround(kSettleCheck_s / dt));
-  const double fall_time = 2 * std::sqrt(2 * deck.insertion_top_m / kGravity);
-  double t = 0, energy = 0;
-  bool capped = false;
-  while (true) {
-    deposition.command("run " + std::to_string(chunk) + " post no");
-    t += static_cast<double>(chunk) * dt;
-    energy = deposition.computeScalar("kinetic_energy");
-    if (!std::isfinite(energy))
-      throw CouplingError(ErrorCode::SimulationFailed, "deposition diverged (kinetic energy is not finite); "
-                                                       "reduce dem.dt_fraction or dem.dt_s");
-    if (t >= fall_time && energy < study.soil.settle_kinetic_energy_J) break;
-    if (t > fall_time + kSettleLimit_s) {
-      capped = true;
-      break;
-    }
-  }
-  for (const auto& line : deck.trim) deposition.command(line);
-  adapter::SettledSoil soil = toNeutral(study, gatherParticles(deposition.get()));
-  soil.soil_hash = study::soilHash(study);
-  soil.backend = study::DepositionBackend::Liggghts;
-  soil.seed = study.soil.deposition_seed;
-  soil.cores = worldSize();
-  soil.settling.kinetic_energy_J = energy;
-  soil.settling.threshold_J = study.soil.settle_kinetic_energy_J;
-  soil.settling.stages = 1;
-  soil.settling.stages_capped = capped ? 1 : 0;
-  soil.settling.simulated_s = t;
-  soil.settling.surface_height_m = adapter::soilSurfaceHeight(soil.particles, study.soil.diameter_max_m);
-  soil.settling.packing_fraction = adapter::packingFraction(soil.particles, study.soil);
-  return soil;
-}
 
 struct ToolState {
   std::string name;

@@ -46,8 +46,10 @@ study::Study smallStudy() {
   tool.motion.depth_m = 0.01;
   tool.motion.velocity_m_s = 0.036;
   tool.motion.start_z_m = 0.03;
+  tool.motion.stroke_m = 0.06;  // within the 120 mm bin (validate checks the path)
   tool.motion.center_x_m = 0.06;  // the bin's centre line
   tool.motion.insertion_velocity_m_s = 0.05;
+  tool.motion.stroke_m = 0.08;  // the path stays in the 120 mm bin (the tests drive the tool themselves)
   tool.fem = {true, 4.06e9, 0.38, 1220, 0.00055, 0, study::ElementOrder::Quadratic};  // quick.json's PMMA (the DEM ignores it)
   s.tools = {tool};
   s.fem.dt_s = 0.001;

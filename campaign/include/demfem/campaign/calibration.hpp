@@ -12,9 +12,14 @@
 //   sequence; each a local NLopt run: BOBYQA (COBYLA for one parameter) for smooth objectives
 //   (weight drops), Subplex for noisy ones (DEM, ObjectiveKind::Noisy); absolute x tolerance
 //   `x_tolerance`, initial step 0.1, at most `max_evaluations`
-//   per start. Cases of one evaluation run concurrently on `jobs` threads.
+//   per start. Cases of one evaluation (each at `model_seeds` deposition seeds for a soil study)
+//   run concurrently on `jobs` threads, after Model::prepare() with the studies of those not in
+//   the run cache.
 // - Every model run goes through the RunCache in `cache_dir` (empty = none): a repeated or resumed
-//   calibration reruns nothing already run.
+//   calibration reruns nothing already run. A run that fails with adapter::CouplingError
+//   SimulationFailed (a DEM blow-up at an extreme value) is not cached, is counted in failed_runs
+//   and its case's quantities are missing from that evaluation (scored as objective.hpp says);
+//   every other failure is thrown.
 // - Uncertainty: local curvature. The Gauss-Newton Hessian H = 2 J^T J of chi2 in optimiser
 //   coordinates from central differences of the residuals (step `curvature_step`); covariance
 //   2 H^-1 (Delta chi2 = 1 at one standard deviation); converted to file units (log parameters:
@@ -67,10 +72,26 @@ struct CalibrationOptions {
   double unidentified_relative = 0.3;
   double noise_chi2 = 1.0;
   int jobs = 2;
+  // Soil-bin cases run with the stroke cut to objective.analysis.evaluation.window_end_mm when the
+  // study's is longer: nothing after the window enters the objective (docs/calibration.md, "Cost").
+  bool stroke_ends_with_window = false;
+  // Soil studies: each case runs at this many deposition seeds (the study's and the next ones), the
+  // runs pooled like measured repeats (objective.hpp): the model's seed scatter averages out as the
+  // measured one does.
+  int model_seeds = 1;
   std::filesystem::path cache_dir;
   std::function<void(const CalibrationProgress&)> on_progress;
   std::function<bool()> stop_requested;
 };
+
+// The optimiser steps of a noisy (DEM) objective: x tolerance 0.02 and curvature step 0.05 of each
+// parameter's bounds. A soil run is one realisation of a random packing: its window mean moves by a
+// few percent between neighbouring parameter values for no physical reason, so smaller steps only
+// resolve that noise (docs/calibration.md, "Optimiser").
+inline void useNoisySteps(CalibrationOptions& options) {
+  options.x_tolerance = 0.02;
+  options.curvature_step = 0.05;
+}
 
 struct CalibrationProblem {
   nlohmann::ordered_json study;  // the study file's JSON
@@ -103,6 +124,7 @@ struct CalibrationResult {
   int evaluations = 0;                      // objective evaluations
   int model_runs = 0;                       // runs computed (not found in the cache)
   int cache_hits = 0;
+  int failed_runs = 0;                      // DEM runs that failed (SimulationFailed): scored as missing quantities
   double wall_time_s = 0;
   // Measured recordings, and the model's recordings at the fit and at the start, per case (plots).
   std::vector<analysis::Recording> measured;

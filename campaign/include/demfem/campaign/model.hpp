@@ -19,8 +19,28 @@
 //   beyond the lowest 40 (static correction keeps the static response exact), except that the record
 //   starts 0.1 s earlier, at rest, like a measured one: the weight is hung at t = 0.1 s (a step fit
 //   needs the baseline before the step).
-// - SoilBinModel (kind coupled or dem-only): one coupled run (fem::CoupledDriver, Fig. 3) against the
-//   built-in DEM backend in-process, outputs in a scratch directory, its sensors.csv read back.
+// - SoilBinModel (kind coupled or dem-only) against the built-in DEM backend in-process, with the
+//   force of SoilForce:
+//   * LoadCell: one coupled run (fem::CoupledDriver, Fig. 3), outputs in a scratch directory, its
+//     sensors.csv read back (force_N = the load cell; a rigid tool's static split of the soil forces);
+//   * Draught: a rigid tool only (kind dem-only or fem.deformable false): the DEM alone drives the
+//     tool's motion plan (adapter::insertAndStartDrag, then one simulate() per FEM step of the drag),
+//     no FEM model; force_N = the draught, minus the sum of the z node forces (N, the soil's force
+//     against the travel), mean over each FEM step; deformation_mm = 0; t_s at the end of each step
+//     from the start of the drag, displacement_mm = velocity x t_s. This is the total force a
+//     soil-bin DEM simulation reports (docs/calibration.md, "Soil against LIGGGHTS").
+//   prepare() makes each case soil's settled-soil file (adapter/settled_soil.hpp, in
+//   adapter::defaultSoilDirectory()) once, before the cases of one evaluation run concurrently: one
+//   deposition serves every depth of one soil (the depth is not part of the soil hash). Packing:
+//   * per soil (no packing study): the case study's own deposition (friction enters the packing, so
+//     every new friction value is a new deposition);
+//   * shared (a packing study, normally the study the command was given): the case soil's file
+//     holds the particles of the packing study's deposition at the case's seed, each tagged with
+//     the case study's layer at its depth (builtin::layerAt): one deposition per seed for a whole
+//     calibration, and every parameter value drags through the same packing (common random
+//     numbers: the objective's noise between neighbouring values is the drag's, not another
+//     packing's). The packing study's soil hash is part of name(). Bin, fill height and particle
+//     sizes must be the packing study's (ArgumentError otherwise).
 #pragma once
 
 #include "demfem/analysis/recording.hpp"
@@ -30,14 +50,18 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace demfem::campaign {
 
-// The study of `key` derived from `study_json` (see contract), loaded and validated. Throws
-// ArgumentError if the study's kind cannot run that kind of case (names the case), study::StudyError
-// if the derived study is invalid.
-study::Study caseStudy(const nlohmann::ordered_json& study_json, const std::string& origin, const analysis::CaseKey& key);
+// The study of `key` derived from `study_json` (see contract), loaded and validated. With
+// `stroke_end_mm`, a soil-bin case's stroke is cut to it when the study's is longer (the run then
+// ends where the objective's window ends). Throws ArgumentError if the study's kind cannot run that
+// kind of case (names the case), study::StudyError if the derived study is invalid.
+study::Study caseStudy(const nlohmann::ordered_json& study_json, const std::string& origin, const analysis::CaseKey& key,
+                       std::optional<double> stroke_end_mm = std::nullopt);
 
 // The case the study itself describes (its weight or its tool depth), with the study's first tool name.
 analysis::CaseKey studyCase(const study::Study& study);
@@ -51,6 +75,9 @@ class Model {
                                   const std::filesystem::path& scratch) = 0;
   // Identifies the model's code path in the run cache (a change of model changes every key).
   virtual std::string name() const = 0;
+  // Called once per evaluation with the studies of the cases about to run (possibly concurrently):
+  // work they share is done here, once. Throws on failure. Default: nothing.
+  virtual void prepare(const std::vector<study::Study>& case_studies) { (void)case_studies; }
 };
 
 class WeightDropModel final : public Model {
@@ -66,14 +93,27 @@ class WeightDropModel final : public Model {
   std::unique_ptr<Impl> impl_;
 };
 
+// What a soil-bin model records as force_N (see contract).
+enum class SoilForce { LoadCell, Draught };
+
 class SoilBinModel final : public Model {
  public:
+  explicit SoilBinModel(SoilForce force = SoilForce::LoadCell, std::optional<study::Study> packing = std::nullopt)
+      : force_(force), packing_(std::move(packing)) {}
+  // Throws ArgumentError for SoilForce::Draught with a deformable tool.
   analysis::Recording run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) override;
-  std::string name() const override { return "coupled-builtin-1"; }
+  std::string name() const override;
+  void prepare(const std::vector<study::Study>& case_studies) override;
+
+ private:
+  void prepareSoil(const study::Study& study) const;
+  SoilForce force_;
+  std::optional<study::Study> packing_;
 };
 
 // The model for the study's kind: weight-drop -> WeightDropModel, coupled / dem-only ->
-// SoilBinModel. Throws ArgumentError for other kinds.
-std::unique_ptr<Model> makeModel(const study::Study& study);
+// SoilBinModel with `soil_force`, its packing shared from `study` when `shared_packing`. Throws
+// ArgumentError for other kinds.
+std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force = SoilForce::LoadCell, bool shared_packing = false);
 
 }  // namespace demfem::campaign

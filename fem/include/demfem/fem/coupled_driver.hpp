@@ -13,7 +13,8 @@
 //   construction"); plan time 0 is the DEM clock when the first FEM step begins. The driver sets
 //   the insertion's RigidMotion before step 0 and the drag's before step insertion_steps; the run
 //   has insertion_steps + drag_steps FEM steps.
-// - Deformable tool (coupled study): ThreeLevelIntegrator started at rest in static equilibrium under
+// - Deformable tool (coupled study): the integrator of study fem.integration (makeIntegrator,
+//   modal.hpp: ModalIntegrator by default, ThreeLevelIntegrator for "full") started at rest in static equilibrium under
 //   the DEM's instantaneous forces at the start; each step uses the forces of the DEM's last interval
 //   (study coupling.force_averaging) as the applied force of the new time level. Sensors:
 //   fem::Sensors (load cell reaction, deformation at the sensor line, tip tilt).

@@ -38,12 +38,54 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <memory>
+#include <vector>
 
 namespace demfem::fem {
 
 struct RayleighDamping {
   double alpha_s = 0;     // C = alpha K + beta M (Eq 4)
   double beta_per_s = 0;
+};
+
+// Eq (4) and Eq (6)-(8) for a mass m and stiffness k: dense matrices, or the scalars of one
+// M-normalized mode (m = 1, k = w^2), or a reaction functional's rows of M and K times a mode.
+template <class T>
+struct ThreeLevelTerms {
+  T A1, A2, A3;
+};
+template <class T>
+ThreeLevelTerms<T> threeLevelTerms(const T& m, const T& k, RayleighDamping damping, double dt_s) {
+  const T c = damping.alpha_s * k + damping.beta_per_s * m;  // Eq (4)
+  const double dt2 = dt_s * dt_s;
+  return {m / dt2 + c / (2 * dt_s) + k / 3,   // Eq (6)
+          2 * m / dt2 - k / 3,                // Eq (7)
+          -m / dt2 + c / (2 * dt_s) - k / 3}; // Eq (8)
+}
+
+// What a checkpoint keeps of an integrator: its step index and its state vectors (layout private to
+// the integrator; restore() checks the sizes).
+struct SavedIntegratorState {
+  std::int64_t step = 0;
+  std::vector<Eigen::VectorXd> vectors;
+};
+
+// The time integration of a reduced tool model as the coupled cycle uses it (Fig. 3): the full
+// three-level form (ThreeLevelIntegrator) or its modal form (ModalIntegrator, modal.hpp). Vectors
+// have the reduced model's DOF layout; forces are the APPLIED keypoint forces (N).
+class TimeIntegrator {
+ public:
+  virtual ~TimeIntegrator() = default;
+  // At rest in static equilibrium under the applied force f0 (Eq 2); step index 0.
+  virtual void start(const Eigen::VectorXd& f0) = 0;
+  // Advances one step with the applied force of the new time level; returns u_{i+1} (m).
+  virtual const Eigen::VectorXd& step(const Eigen::VectorXd& applied_next) = 0;
+  virtual const Eigen::VectorXd& displacement() const = 0;
+  // Force of the supports on the tool (N), at least at every load-cell DOF (what Sensors reads).
+  virtual Eigen::VectorXd reactions() const = 0;
+  virtual SavedIntegratorState save() const = 0;
+  // Throws std::invalid_argument if `state` was not saved by an integrator of this kind and size.
+  virtual void restore(const SavedIntegratorState& state) = 0;
 };
 
 // Everything the three-level recursion carries from step to step.
@@ -54,7 +96,7 @@ struct IntegratorState {
   Eigen::VectorXd applied;          // applied part of f_i (N); f - applied = reactions at level i
 };
 
-class ThreeLevelIntegrator {
+class ThreeLevelIntegrator : public TimeIntegrator {
  public:
   // Throws std::invalid_argument for dt <= 0, negative damping, or if A1 on the free DOFs is not
   // positive definite.
@@ -62,14 +104,16 @@ class ThreeLevelIntegrator {
 
   // At rest in static equilibrium under the applied force `f0` (Eq 2): u_0 = u_{-1} = K^-1 f0,
   // f_0 = f_{-1} = f0 + reactions. step index 0.
-  void start(const Eigen::VectorXd& f0);
+  void start(const Eigen::VectorXd& f0) override;
 
   // Eq (9) with the applied force f_{i+1}; then Eq (10) for the fixed DOFs. Returns u_{i+1}.
-  const Eigen::VectorXd& step(const Eigen::VectorXd& applied_next);
+  const Eigen::VectorXd& step(const Eigen::VectorXd& applied_next) override;
 
-  const Eigen::VectorXd& displacement() const { return state_.u; }
+  const Eigen::VectorXd& displacement() const override { return state_.u; }
   // Force of the supports on the tool at every DOF (N), nonzero only at fixed DOFs.
-  Eigen::VectorXd reactions() const;
+  Eigen::VectorXd reactions() const override;
+  SavedIntegratorState save() const override;
+  void restore(const SavedIntegratorState& state) override;
   double time() const { return static_cast<double>(state_.step) * dt_; }
   double dt() const { return dt_; }
 

@@ -210,8 +210,13 @@ struct WeightDrop {
   bool operator==(const WeightDrop&) const = default;
 };
 
+// How the reduced tool model is integrated in time (fem/modal.hpp): in modal coordinates with the
+// modes the FEM step resolves and a static correction (default), or the full three-level form.
+enum class FemIntegration { Modal, Full };
+
 struct FemSettings {
   double dt_s = 0.001;            // Table 3 dt_FEM
+  FemIntegration integration = FemIntegration::Modal;  // key fem.integration: "modal" | "full"
   bool operator==(const FemSettings&) const = default;
 };
 

@@ -5,7 +5,7 @@
 // - The soil of a study is the backend-neutral file adapter::settledSoilFile(study, dir)
 //   (adapter/settled_soil.hpp); it is deposited by the backend soil.deposition.backend names and
 //   read by every backend.
-// - depositWith() deposits with the given backend (built-in: `cores` OpenMP threads; LIGGGHTS: in this
+// - depositWith() deposits with the given backend (built-in: `cores` threads; LIGGGHTS: in this
 //   process, one MPI rank) and returns the soil with its settling figures, not written. Unless
 //   `quiet`, it reports progress with time left and each stage's summary on standard error.
 // - An unsettled soil (a settling stage hit its time cap, or the final kinetic energy is not below

@@ -79,17 +79,22 @@ struct ContactStiffness {
 inline ContactStiffness contactStiffness(const study::ContactModel& model, const PairLaw& law,
                                          double reff, double meff) {
   ContactStiffness s;
-  if (model.normal == study::NormalModel::EdemHysteretic) {
-    s.kn = 5.0 * reff * law.yield_min_Pa;
-    s.kt = model.stiffness_factor * s.kn;
-    s.gamma_n = 2.0 * model.damping_factor * std::sqrt(meff * s.kn);  // on the K1 branch
-    s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
-  } else {
-    s.kn = physics::hookeNormalStiffness(law.youngs_eff_Pa, reff, meff, model.characteristic_velocity_m_s);
-    s.kt = s.kn;
-    const double q = std::numbers::pi / law.log_restitution;
-    s.gamma_n = std::sqrt(4.0 * meff * s.kn / (1.0 + q * q));
-    s.gamma_t = s.gamma_n;
+  switch (model.normal) {  // no default: a new normal law must say its stiffness here
+    case study::NormalModel::EdemHysteretic:
+      s.kn = 5.0 * reff * law.yield_min_Pa;
+      s.kt = model.stiffness_factor * s.kn;
+      s.gamma_n = 2.0 * model.damping_factor * std::sqrt(meff * s.kn);  // on the K1 branch
+      s.gamma_t = 2.0 * model.damping_factor * std::sqrt(meff * s.kt);
+      return s;
+    case study::NormalModel::Hooke:
+    case study::NormalModel::HookeHysteresis: {
+      s.kn = physics::hookeNormalStiffness(law.youngs_eff_Pa, reff, meff, model.characteristic_velocity_m_s);
+      s.kt = s.kn;
+      const double q = std::numbers::pi / law.log_restitution;
+      s.gamma_n = std::sqrt(4.0 * meff * s.kn / (1.0 + q * q));
+      s.gamma_t = s.gamma_n;
+      return s;
+    }
   }
   return s;
 }
@@ -126,6 +131,7 @@ struct ContactKinematics {
   double vn;          // normal relative velocity (v_i - v_j) . n
   double vt[3];       // tangential relative velocity at the contact point (incl. rotation)
   double wrel[3];     // w_i - w_j (wall: w_i)
+  double wrel_norm;   // |wrel| (needed by cdt only; the pair loop computes it for a batch of contacts)
   double wi[3], wj[3];// angular velocities (wall: wj = 0)
   double reff;        // R* (wall: R_i)
   double di, dj;      // centre-to-contact distances (wall: dj = 0)
@@ -269,7 +275,7 @@ template <study::NormalModel N, study::RollingModel R>
       if (wjm > 0) out.torque_j[c] -= f * k.dj * k.wj[c] / wjm;
     }
   } else if constexpr (R == study::RollingModel::Cdt) {
-    const double wm = std::sqrt(dot3(k.wrel, k.wrel));
+    const double wm = k.wrel_norm;
     if (wm > 0) {
       const double arm = wall ? k.di : k.reff;
       const double scale = law.rolling_friction * s.kn * k.delta * arm / wm;

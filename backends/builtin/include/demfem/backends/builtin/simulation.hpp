@@ -1,5 +1,5 @@
 // The built-in DEM engine (docs/architecture.md section 5): spheres, plane walls and triangle-mesh walls,
-// velocity-Verlet integration, linked cells + Verlet lists with a skin, OpenMP.
+// velocity-Verlet integration, linked cells + Verlet lists with a skin, a thread team (thread_team.hpp).
 //
 // Contract
 // - SI units, bin frame (x across, y up, z along the bin; docs/architecture.md section 10). Gravity along -y
@@ -15,6 +15,9 @@
 // - Determinism: with the same inputs and thread count, results are bit-identical. Each thread sums
 //   pair forces into its own buffer over a static partition of the particles; the buffers are added
 //   in thread order. Wall contacts are gathered in particle order.
+// - Threads: each simulation owns its team of `threads` threads (a copy gets its own); one step is
+//   one run of the team (docs/builtin-dem.md, "Threads on a shared machine"). A simulation is used
+//   by one caller at a time.
 // - Time step: setTimeStep() refuses a step above the stability limit of the stiffest spring
 //   (2 sqrt(m*/k_max), explicit central-difference limit of an undamped oscillator).
 // - Failure: run() throws BlowUp naming the particle, the step and what went wrong (NaN, overlap
@@ -27,6 +30,7 @@
 
 #include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/backends/builtin/contact_law.hpp"
+#include "demfem/backends/builtin/thread_team.hpp"
 #include "demfem/backends/builtin/triangle_mesh.hpp"
 #include "demfem/study/study.hpp"
 
@@ -161,19 +165,54 @@ class DemSimulation {
     double force[3];                // on the particle
   };
 
-  struct CellGrid;
+  struct ThreadState {
+    std::vector<double> f, t;            // pair force buffers (more than one thread)
+    std::vector<WallContact> wall;       // the wall contacts of its particles, in particle order
+    std::vector<std::int32_t> rows;      // list build: the neighbours of its rows
+    std::vector<std::int32_t> batch_slot;  // pair loop: touching slots of a batch of rows
+    std::vector<double> batch_r2, batch_r, batch_rinv, batch_w2, batch_wnorm;
+    double pair_max = 0, wall_max = 0;   // largest overlap of its pair and of its wall contacts
+    std::int64_t pair_bad = -1, wall_bad = -1, kick_bad = -1;  // first failing particle, -1 none
+    bool moved = false;                  // a particle moved beyond skin/2 since the last build
+  };
+
+  // Linked cells of edge >= 2 R_max + skin over the particles' bounding box: counting-sorted
+  // particle ids per cell (neighbour_lists.cpp).
+  struct CellGrid {
+    Vec3 lo{0, 0, 0};
+    double size = 0;
+    int n[3] = {1, 1, 1};
+    std::vector<std::int32_t> start, items;
+    int cellOf(double c, int axis) const;
+    std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; }
+  };
+
+  // What one thread of the team keeps from step to step (memory reused) and reports to the others.
+  // Particles [lo, hi) of thread tid (the static partition every loop uses).
+  std::size_t rangeBegin(int tid) const { return particleCount() * tid / threads_; }
+  std::size_t rangeEnd(int tid) const { return particleCount() * (tid + 1) / threads_; }
+
+  // simulation.cpp: the step is one team run; each phase is called by every thread with its tid.
   void step();
+  void drift(int tid);    // half kick, drift, skin check, force reset
+  void kick(int tid);     // half kick, health check
+  bool contactForces(int tid);  // pair and wall forces added to f_, t_; false if a contact failed
+  void raiseFailure() const;    // throws BlowUp for the first failure the threads recorded
+  void resetFailures();
   // neighbour_lists.cpp: linked cells, the half pair list, the wall candidates (broad search)
-  void rebuildLists();
-  void buildNeighbourList(const CellGrid& grid);
+  void rebuildLists(int tid);
+  void buildCellGrid();
+  void buildRows(int tid);
+  void carryHistory(int tid);
   void buildWallCandidates(const CellGrid& grid);
   bool meshesMovedBeyondSkin() const;
   void updateMeshBinNodes();
   // pair_forces.cpp and wall_forces.cpp: each a loop per contact model (template arguments)
-  void pairForces();
-  template <study::NormalModel N, study::RollingModel R> void pairLoop();
-  void wallForces();
-  template <study::NormalModel N, study::RollingModel R> void wallLoop();
+  void pairForces(int tid);
+  template <study::NormalModel N, study::RollingModel R> void pairLoop(int tid);
+  void sumPairForces(int tid);
+  void wallForces(int tid);
+  template <study::NormalModel N, study::RollingModel R> void wallLoop(int tid);
   int planeTouches(std::size_t i, WallTouch* touch, int count) const;  // fine search: appends, returns the count
   int meshTouches(std::size_t i, WallTouch* touch, int count) const;
   void matchHistory(std::size_t i, const WallTouch* touch, int count, const bool* accepted, int* matched_old) const;
@@ -188,7 +227,6 @@ class DemSimulation {
       t_[3 * i + c] = 0;
     }
   }
-  void contactForces();  // adds pair and wall contact forces to f_, t_
   ContactStiffness wallStiffness(int i, int wall_material) const;
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
   void useMaterial(int material, bool particle);
@@ -231,13 +269,19 @@ class DemSimulation {
   std::vector<std::vector<double>> mesh_force_, mesh_impulse_;
   std::vector<Vec3> plane_force_;
 
-  // per-thread force buffers (threads_ > 1) and wall contacts found by each thread (kept to reuse
-  // their memory from step to step)
-  std::vector<std::vector<double>> thread_f_, thread_t_;
   std::vector<std::size_t> thread_window_end_;  // one past the highest particle a thread's rows reach
-  std::vector<std::vector<WallContact>> thread_wall_;
   // blow-up detection filled by the force loops
   double max_overlap_ = 0;
+
+  // the team and what its threads share within a step
+  ThreadTeam team_;
+  std::vector<ThreadState> thread_;
+  CellGrid grid_;
+  std::vector<std::int32_t> build_start_, build_j_;  // the list being built (rebuildLists)
+  std::vector<ContactStiffness> next_stiff_;
+  std::vector<double> next_hist_;
+  std::vector<std::uint8_t> next_touch_;
+  bool rebuild_ = false;
 };
 
 }  // namespace demfem::builtin
