@@ -1,9 +1,15 @@
 // Cone penetration on a small settled bin through the builtin DEM (Section 2.10.3, Fig. 10's finding):
 // the resistance grows with depth, and a soil whose deeper layer has Table 4's higher friction resists
-// more at depth than the same soil with the top layer's friction throughout.
+// more at depth than the same packing with the top layer's friction throughout. As in the paper (the
+// non-layered assembly is the layered one with layer1's friction), both soils hold the particles of
+// one deposition, shared as campaign/model.hpp shares a packing: the comparison is the friction's
+// alone. The packing is the non-layered soil's: the layered soil's own deposition, rained with the
+// deep layer's friction, stands in the insertion lattice's columns (docs/analysis.md, "Cone
+// penetration").
 #include "demfem/adapter/cone_drive.hpp"
 #include "demfem/analysis/cone_penetration.hpp"
 #include "demfem/backends/builtin/backend.hpp"
+#include "demfem/campaign/model.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -52,7 +58,7 @@ study::Study coneStudy(bool layered) {
   s.fem.dt_s = 0.002;
   s.dem.criterion = study::TimeStepCriterion::StiffestSpring;
   s.dem.dt_fraction = 0.1;
-  s.dem.threads = 2;
+  s.dem.threads = 1;  // two threads of one run waited for each other on a loaded machine
   return s;
 }
 
@@ -87,10 +93,13 @@ double meanBetween(const analysis::CprSummary& s, double from_m, double to_m) {
 
 TEST_CASE("CPR of a settled small bin grows with depth and the layered soil's exceeds the non-layered one at depth", "[builtin]") {
   const auto dir = std::filesystem::temp_directory_path() / "demfem-builtin-cpt-test";
+  std::filesystem::remove_all(dir);  // a soil file left by another version would not be this packing
   std::filesystem::create_directories(dir);
   ::setenv("DEMFEM_SOIL_DIR", dir.c_str(), 1);
-  const auto layered = penetrate(coneStudy(true));
-  const auto unlayered = penetrate(coneStudy(false));
+  const study::Study layered_study = coneStudy(true), unlayered_study = coneStudy(false);
+  campaign::SoilBinModel(campaign::SoilForce::Draught, unlayered_study).prepare({unlayered_study, layered_study});
+  const auto layered = penetrate(layered_study);
+  const auto unlayered = penetrate(unlayered_study);
   INFO("layered CPR at the deepest grid depth " << layered.mean_Pa.back() << " Pa, non-layered " << unlayered.mean_Pa.back() << " Pa");
   REQUIRE(layered.depth_m.back() >= 0.03);
   REQUIRE(unlayered.depth_m.back() >= 0.03);
