@@ -23,6 +23,7 @@ struct CptOptions {
   std::vector<std::string> measured;
   double depth_step_mm = 1.0;
   std::string backend;
+  std::string packing;  // study whose deposition every study's soil holds (empty: each its own)
   int threads = 0;
   bool allow_unsettled_soil = false;
   bool no_plots = false;

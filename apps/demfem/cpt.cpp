@@ -6,13 +6,17 @@
 #include "commands.hpp"
 
 #include "demfem/adapter/cone_drive.hpp"
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/analysis/cpt_report.hpp"
 #include "demfem/analysis/recording.hpp"
+#include "demfem/campaign/model.hpp"
+#include "demfem/campaign/parameters.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
 #include "demfem/cli/soil_supply.hpp"
 #include "demfem/study/study.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -42,12 +46,37 @@ analysis::CptSoil cptSoil(const study::Study& study, const std::vector<adapter::
   return soil;
 }
 
+// --packing: the study's soil file made from the packing study's deposition (campaign/model.hpp,
+// shared packing), and refused when a file made otherwise is already there.
+void sharePacking(const study::Study& study, const std::string& packing_file) {
+  const study::Study packing = loadCheckedStudy(packing_file);
+  for (const auto* s : {&packing, &study})
+    if (s->soil.deposition_backend != study::DepositionBackend::Builtin)
+      throw InputError(s->name + ": /soil/deposition/backend: --packing shares a built-in deposition only");
+  try {
+    campaign::SoilBinModel(campaign::SoilForce::Draught, packing).prepare({study});
+  } catch (const campaign::ArgumentError& e) {
+    throw InputError("--packing " + packing_file + ": " + e.what());
+  }
+  study::Study reference = packing;
+  reference.soil.deposition_seed = study.soil.deposition_seed;
+  const auto dir = adapter::defaultSoilDirectory();
+  const auto file = adapter::settledSoilFile(study, dir);
+  const auto own = adapter::readSettledSoil(file, study).particles;
+  const auto shared = adapter::readSettledSoil(adapter::settledSoilFile(reference, dir), reference).particles;
+  const auto same = [](const adapter::SoilParticle& a, const adapter::SoilParticle& b) { return a.x_m == b.x_m && a.radius_m == b.radius_m; };
+  if (!std::equal(own.begin(), own.end(), shared.begin(), shared.end(), same))
+    throw InputError(file.string() + ": the settled soil of '" + study.name + "' is another deposition than --packing " + packing_file +
+                     "'s; remove it or use another soil directory");
+}
+
 analysis::CptSoil pushStudyCones(const std::string& study_file, const CptOptions& o) {
   study::Study study = loadCheckedStudy(study_file);
   if (study.kind != study::StudyKind::ConePenetration)
     throw InputError(study_file + ": /kind: demfem cpt runs cone-penetration studies only");
   if (o.threads > 0) study.dem.threads = o.threads;
   study.output.directory = std::filesystem::path(o.output_dir) / "runs" / study.name;  // the backend's VTK files
+  if (!o.packing.empty()) sharePacking(study, o.packing);
   const BackendEntry& backend = findBackend(o.backend.empty() ? study.dem.backend : o.backend);
   if (!backend.capabilities.simulates_soil)
     throw InputError("backend '" + backend.capabilities.name + "' simulates no soil: cone penetration needs a soil backend");
@@ -108,6 +137,11 @@ void addCptOptions(CLI::App& cmd, CptOptions& o) {
       ->check(CLI::ExistingFile);
   cmd.add_option("--depth-step-mm", o.depth_step_mm, "Depth grid of the statistics (mm)")->capture_default_str();
   cmd.add_option("--backend", o.backend, "DEM backend (default: the study's dem.backend)");
+  cmd.add_option("--packing", o.packing,
+                 "Study whose built-in deposition every study's soil holds (same bin, fill height and particle sizes), each particle "
+                 "tagged with the study's layer at its depth: the studies then differ by friction only, as the paper's layered "
+                 "and non-layered assemblies")
+      ->check(CLI::ExistingFile);
   cmd.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM (default: the study's dem.threads)")->check(CLI::PositiveNumber);
   cmd.add_flag("--allow-unsettled-soil", o.allow_unsettled_soil, "Run even if the settled soil is not settled");
   cmd.add_flag("--no-plots", o.no_plots, "Do not draw plots");

@@ -19,10 +19,11 @@ nlohmann::json jsonStdout(const std::vector<std::string>& args, const fs::path& 
 }
 
 // studies/cpt.json on a 80 x 140 mm bin with 40 mm of soil (one layer of 20 mm, one of 20 mm) and
-// two cones pushed to 28 mm at 50 mm/s: a few hundred particles, seconds.
-fs::path tinyCptStudy(const fs::path& dir) {
+// two cones pushed to 28 mm at 50 mm/s: a few hundred particles, seconds. Non-layered: the deep
+// layer has layer1's friction (as studies/cpt_unlayered.json).
+fs::path tinyCptStudy(const fs::path& dir, bool layered = true) {
   nlohmann::json study = nlohmann::json::parse(readText(sourceDir() / "studies" / "cpt.json"));
-  study["name"] = "cpt_tiny";
+  study["name"] = layered ? "cpt_tiny" : "cpt_tiny_unlayered";
   study["soil"]["bin"]["length_mm"] = 140;
   study["soil"]["bin"]["width_mm"] = 80;
   study["soil"]["fill_height_mm"] = 40;
@@ -36,6 +37,10 @@ fs::path tinyCptStudy(const fs::path& dir) {
     bool keep = true;
     for (const auto& m : i["materials"]) keep = keep && (m == "layer1" || m == "layer4" || m == "steel");
     if (keep) interactions.push_back(i);
+    if (keep && !layered && i["materials"][0] == "layer4") {
+      if (i["materials"][1] == "layer4") interactions.back()["static_friction"] = 0.07;
+      interactions.back()["rolling_friction"] = 0.02;
+    }
   }
   study["soil"]["interactions"] = interactions;
   nlohmann::json materials = nlohmann::json::array();
@@ -47,7 +52,7 @@ fs::path tinyCptStudy(const fs::path& dir) {
   for (int c = 0; c < 2; ++c) study["tools"][c]["motion"] = {{"depth_mm", 28}, {"velocity_mm_s", 50}, {"start_z_mm", 40 + 60 * c}};
   study["dem"] = {{"backend", "builtin"}, {"criterion", "stiffest-spring"}, {"dt_fraction", 0.1}, {"threads", 1}};
   study["fem"] = {{"dt_s", 0.002}};
-  const fs::path file = dir / "cpt_tiny.json";
+  const fs::path file = dir / (study["name"].get<std::string>() + ".json");
   std::ofstream(file) << study.dump(2);
   return file;
 }
@@ -82,6 +87,40 @@ TEST_CASE("demfem cpt reports CPR per study and compares it with measured profil
   CHECK(again["comparisons"][0]["within_measured_band"].get<double>() == 1.0);
   CHECK(again["comparisons"][0]["mean_relative_difference"].get<double>() == Approx(0).margin(1e-9));
   CHECK(again["measured"]["mean_deviation"].get<double>() == Approx(again["soils"][0]["mean_deviation"].get<double>()).epsilon(1e-9));
+  fs::remove_all(dir);
+}
+
+double deepMean_kPa(const nlohmann::json& soil) {  // mean CPR over the deepest 5 grid depths
+  const auto& cpr = soil["mean_CPR_kPa"];
+  REQUIRE(cpr.size() >= 5);
+  double sum = 0;
+  for (std::size_t k = cpr.size() - 5; k < cpr.size(); ++k) sum += cpr[k].get<double>();
+  return sum / 5;
+}
+
+TEST_CASE("demfem cpt --packing gives every study the packing study's particles and refuses a soil deposited otherwise", "[apps]") {
+  const fs::path dir = freshDir("cpt-packing");
+  ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);
+  const fs::path layered = tinyCptStudy(dir, true), unlayered = tinyCptStudy(dir, false);
+  const auto doc = jsonStdout({app("demfem"), "cpt", layered.string(), unlayered.string(), "--packing", unlayered.string(), "--output",
+                               (dir / "cpt").string(), "--no-plots", "--json", "-"},
+                              dir / "cpt");
+  REQUIRE(doc["soils"].size() == 2);
+  // One packing, two frictions: the deeper layer's Table 4 friction resists more (Fig. 10's
+  // finding; measured 8.6 against 2.3 kPa).
+  CHECK(deepMean_kPa(doc["soils"][0]) > 2 * deepMean_kPa(doc["soils"][1]));
+
+  // The layered soil deposited on its own replaces the shared one: --packing names the file and stops.
+  Process deposit({app("demfem"), "deposit", layered.string(), "--force", "--quiet"}, dir / "deposit");
+  REQUIRE(exitedOk(deposit.wait(600s)));
+  Process refused({app("demfem"), "cpt", layered.string(), "--packing", unlayered.string(), "--output", (dir / "cpt2").string(),
+                   "--no-plots", "--quiet"},
+                  dir / "cpt2");
+  const int status = refused.wait(600s);
+  INFO(refused.err());
+  CHECK((WIFEXITED(status) && WEXITSTATUS(status) == 2));
+  CHECK(refused.err().find("another deposition than --packing") != std::string::npos);
+  CHECK(!fs::exists(dir / "cpt2" / "cpt.json"));
   fs::remove_all(dir);
 }
 
