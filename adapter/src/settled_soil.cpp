@@ -52,6 +52,7 @@ nlohmann::json headerJson(const SettledSoil& soil) {
             {"threshold_J", s.threshold_J},
             {"stages", s.stages},
             {"stages_capped", s.stages_capped},
+            {"final_phase_capped", s.final_phase_capped},
             {"simulated_s", s.simulated_s},
             {"surface_height_m", s.surface_height_m},
             {"packing_fraction", s.packing_fraction}}},
@@ -143,7 +144,7 @@ SettledSoil readSettledSoil(const std::filesystem::path& file) {
     const auto& s = h.at("settling");
     soil.settling = {s.at("kinetic_energy_J").get<double>(), s.at("threshold_J").get<double>(),
                      s.at("stages").get<std::int32_t>(),     s.at("stages_capped").get<std::int32_t>(),
-                     s.at("simulated_s").get<double>(),      s.at("surface_height_m").get<double>(),
+                     s.at("final_phase_capped").get<bool>(), s.at("simulated_s").get<double>(),      s.at("surface_height_m").get<double>(),
                      s.at("packing_fraction").get<double>()};
     count = h.at("particle_count").get<std::uint64_t>();
   } catch (const std::exception& e) {
@@ -206,9 +207,7 @@ double packingFraction(const std::vector<SoilParticle>& particles, const study::
 
 std::string unsettledReason(const SettlingFigures& s) {
   std::string reason;
-  if (s.stages_capped > 0)
-    reason = std::to_string(s.stages_capped) + " of " + std::to_string(s.stages) +
-             " settling stages hit their time cap above the kinetic-energy threshold";
+  if (s.final_phase_capped) reason = "the final settling phase hit its time cap above the kinetic-energy threshold";
   if (!(s.kinetic_energy_J < s.threshold_J)) {
     char text[160];
     std::snprintf(text, sizeof text, "final kinetic energy %.3g J is not below soil.deposition.settle_kinetic_energy_J = %.3g J",
@@ -232,6 +231,7 @@ std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path&
                               {"threshold_J", s.threshold_J},
                               {"stages", s.stages},
                               {"stages_capped", s.stages_capped},
+                              {"final_phase_capped", s.final_phase_capped},
                               {"simulated_s", s.simulated_s},
                               {"surface_height_mm", s.surface_height_m * 1e3},
                               {"packing_fraction", s.packing_fraction}};

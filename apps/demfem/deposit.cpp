@@ -36,6 +36,7 @@ nlohmann::json settlingJson(const adapter::SettledSoil& soil) {
           {"threshold_J", s.threshold_J},
           {"stages", s.stages},
           {"stages_capped", s.stages_capped},
+          {"final_phase_capped", s.final_phase_capped},
           {"simulated_s", s.simulated_s},
           {"surface_height_mm", s.surface_height_m * 1e3},
           {"packing_fraction", s.packing_fraction},

@@ -138,12 +138,12 @@ TEST_CASE("an unsettled soil stops demfem run and demfem-dem unless allowed, and
   const fs::path soil_dir = dir / "soil";
   ::setenv("DEMFEM_SOIL_DIR", soil_dir.c_str(), 1);  // inherited by the processes below
   const auto study = demfem::study::loadStudy(study_file);
-  // A soil whose deposition hit its time cap in 3 of 5 stages: a few grains resting on the floor,
-  // away from the tool's path.
+  // A soil whose deposition hit its time cap in 3 of 5 stages, the final one among them: a few
+  // grains resting on the floor, away from the tool's path.
   demfem::adapter::SettledSoil soil;
   soil.soil_hash = demfem::study::soilHash(study);
   soil.seed = study.soil.deposition_seed;
-  soil.settling = {2.5e-6, study.soil.settle_kinetic_energy_J, 5, 3, 7.5, 0.0, 0.0};
+  soil.settling = {2.5e-6, study.soil.settle_kinetic_energy_J, 5, 3, true, 7.5, 0.0, 0.0};
   const auto deepest = static_cast<std::int32_t>(study.soil.layers.size()) - 1;
   for (int i = 0; i < 6; ++i)
     soil.particles.push_back({{0.02 + 0.012 * i, study.soil.diameter_max_m / 2, 0.02}, study.soil.diameter_max_m / 2, deepest});
@@ -155,7 +155,7 @@ TEST_CASE("an unsettled soil stops demfem run and demfem-dem unless allowed, and
                   dir / "refused-run");
   CHECK(WIFEXITED(refused.wait(120s)));
   CHECK_THAT(refused.err(), Catch::Contains(soil_file.string()) && Catch::Contains("is not settled") &&
-                                Catch::Contains("3 of 5 settling stages") && Catch::Contains("--allow-unsettled-soil"));
+                                Catch::Contains("final settling phase hit its time cap") && Catch::Contains("--allow-unsettled-soil"));
   CHECK_FALSE(fs::exists(dir / "refused" / "sensors.json"));
 
   Process server({app("demfem-dem"), "--study", study_file.string(), "--backend", "builtin", "--bind",
@@ -174,6 +174,7 @@ TEST_CASE("an unsettled soil stops demfem run and demfem-dem unless allowed, and
   const auto record = nlohmann::json::parse(readText(dir / "out" / "sensors.json")).at("soil");
   CHECK(record.at("settled") == false);
   CHECK(record.at("stages_capped") == 3);
+  CHECK(record.at("final_phase_capped") == true);
   CHECK(record.at("stages") == 5);
   CHECK(record.at("kinetic_energy_J") == 2.5e-6);
   CHECK(record.at("particles") == soil.particles.size());

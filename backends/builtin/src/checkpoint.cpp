@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 namespace demfem::builtin {
 
@@ -32,6 +33,7 @@ bool isOffsets(const std::vector<std::int32_t>& start, std::size_t rows, std::si
 }  // namespace
 
 void DemSimulation::saveState(adapter::PayloadWriter& out) const {
+  if (damping_per_s_ != 0) throw std::logic_error("builtin DEM: saveState() with settling damping on (a deposition is never saved)");
   out.put(kStateTag);
   out.put(static_cast<std::int32_t>(threads_));
   out.put(static_cast<std::int32_t>(layout_.size));

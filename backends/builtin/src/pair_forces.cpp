@@ -115,6 +115,8 @@ void DemSimulation::pairLoop(int tid) {
         ContactKinematics kin =
             contactKinematics<false>(normal, ts.batch_r[k], ri, rj, &v_[3 * i], &w_[3 * i], &v_[3 * j], &w_[3 * j]);
         kin.wrel_norm = ts.batch_wnorm[k];
+        kin.inv_ii = inv_inertia_[i];
+        kin.inv_ij = inv_inertia_[j];
         if (kin.delta > local_max) local_max = kin.delta;
         if (kin.delta > overlapLimitFraction() * std::min(ri, rj) && bad < 0) bad = static_cast<std::int64_t>(i);
         const ContactResult res = contactForce<N, R>(model_, layout_, laws_i[material_[j]], nb_stiff_[s], kin, dt,

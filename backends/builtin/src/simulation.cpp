@@ -178,6 +178,12 @@ void DemSimulation::updateMeshBinNodes() {
 
 // ---------------------------------------------------------------- integration
 
+void DemSimulation::setSettlingDamping(double rate_per_s) {
+  if (!(rate_per_s >= 0 && std::isfinite(rate_per_s)))
+    throw std::invalid_argument("builtin DEM: settling damping must be finite and >= 0 1/s, got " + std::to_string(rate_per_s));
+  damping_per_s_ = rate_per_s;
+}
+
 void DemSimulation::run(long steps) {
   if (steps <= 0) return;
   if (!(dt_ > 0)) throw std::logic_error("builtin DEM: run() before setTimeStep()");

@@ -17,7 +17,11 @@ namespace demfem::builtin {
 namespace {
 constexpr double kSettledPacking = 0.60;     // solid fraction assumed to size each stage's batch
 constexpr double kLatticeGap = 1.10;          // insertion lattice spacing / d_max
-constexpr double kStageTimeCap_s = 1.5;       // simulated settling time cap per stage
+constexpr double kStageTimeCap_s = 1.5;        // simulated settling time cap per layer stage, after the fall
+constexpr double kFinalTimeCap_s = 3.0;        // the final settling's cap: the soil that is kept
+constexpr int kSustainedChecks = 3;            // consecutive energy checks below the threshold
+constexpr double kSettlingDamping_per_s = 20;  // background damping once the stage has landed (KE e-folds in 25 ms)
+constexpr double kLandingFallTimes = 2.0;      // undamped for this many fall times of the highest particle
 constexpr int kEnergyCheckSteps = 200;        // steps between kinetic-energy checks
 constexpr double kDepositionStepFraction = 0.1;  // of the stiffest spring's critical step, at least
 }  // namespace
@@ -58,6 +62,23 @@ double meanParticleVolume(const study::Soil& soil) {
   // Mean sphere volume for radii uniform in [rmin, rmax]: E[r^3] = (rmax^4 - rmin^4) / (4 (rmax - rmin)).
   const double mean_r3 = rmax > rmin ? (std::pow(rmax, 4) - std::pow(rmin, 4)) / (4 * (rmax - rmin)) : rmin * rmin * rmin;
   return 4.0 / 3.0 * std::numbers::pi * mean_r3;
+}
+
+// Settles `sim` until its kinetic energy has stayed below `threshold_J` for kSustainedChecks checks
+// in a row: undamped while the stage falls and lands (`undamped_s`), then with the settling damping,
+// for at most `cap_s` more. The damping is off again on return. `tick` gets the fraction of the
+// stage's time used.
+bool settle(DemSimulation& sim, double threshold_J, double undamped_s, double cap_s, const std::function<void(double)>& tick) {
+  const double start = sim.time(), end = undamped_s + cap_s;
+  int below = 0;
+  while (below < kSustainedChecks && sim.time() - start < end) {
+    if (sim.settlingDamping() == 0 && sim.time() - start >= undamped_s) sim.setSettlingDamping(kSettlingDamping_per_s);
+    sim.run(kEnergyCheckSteps);
+    tick((sim.time() - start) / end);
+    below = sim.settlingDamping() > 0 && sim.kineticEnergy() < threshold_J ? below + 1 : 0;
+  }
+  sim.setSettlingDamping(0);
+  return below == kSustainedChecks;
 }
 
 std::size_t estimatedParticleCount(const study::Soil& soil) {
@@ -122,19 +143,15 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
                                kDepositionStepFraction * sim.criticalTimeStep(study::TimeStepCriterion::StiffestSpring)));
       dt_set = true;
     }
+    // The highest particle of the batch falls from its lattice level onto the pack.
+    const double drop = y0 + spacing * static_cast<double>((count - 1) / (static_cast<std::size_t>(nx) * nz)) - ytop;
+    const double g = std::hypot(sim.gravity()[0], sim.gravity()[1], sim.gravity()[2]);
+    const double fall_s = std::sqrt(2 * std::max(drop, 0.0) / g);
     const double start = sim.time();
-    double energy = sim.kineticEnergy();
-    bool settled = false;
-    // Fall first (energy rises), then settle below the threshold.
-    while (sim.time() - start < kStageTimeCap_s) {
-      sim.run(kEnergyCheckSteps);
-      if (progress) progress((static_cast<double>(s) + (sim.time() - start) / kStageTimeCap_s) / stages, "");
-      energy = sim.kineticEnergy();
-      if (energy < soil.settle_kinetic_energy_J && sim.time() - start > 0.05) {
-        settled = true;
-        break;
-      }
-    }
+    const bool settled = settle(sim, soil.settle_kinetic_energy_J, kLandingFallTimes * fall_s, kStageTimeCap_s, [&](double f) {
+      if (progress) progress((static_cast<double>(s) + f) / stages, "");
+    });
+    const double energy = sim.kineticEnergy();
     if (!settled) ++out.settling.stages_capped;
     filled = stage_tops[s];
     if (progress) {
@@ -154,19 +171,17 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
     sim.setParticleMaterial(static_cast<int>(i), sim.materials().index(soil.layers[layer].material), layer);
   }
   const double start = sim.time();
-  bool settled = false;
-  while (sim.time() - start < kStageTimeCap_s) {
-    sim.run(kEnergyCheckSteps);
-    if (progress) progress((stages - 1.0 + (sim.time() - start) / kStageTimeCap_s) / stages, "");
-    if (sim.kineticEnergy() < soil.settle_kinetic_energy_J) {
-      settled = true;
-      break;
-    }
-  }
+  const bool settled = settle(sim, soil.settle_kinetic_energy_J, 0.0, kFinalTimeCap_s, [&](double f) {
+    if (progress) progress((stages - 1.0 + f) / stages, "");
+  });
   if (!settled) ++out.settling.stages_capped;
-  if (progress)
-    progress(1.0, std::string("final settling: kinetic energy ") + std::to_string(sim.kineticEnergy()) + " J after " +
-                      std::to_string(sim.time() - start) + " s" + (settled ? "" : " (time cap reached before the energy threshold)"));
+  out.settling.final_phase_capped = !settled;
+  if (progress) {
+    std::ostringstream line;
+    line << "final settling: kinetic energy " << sim.kineticEnergy() << " J after " << sim.time() - start << " s"
+         << (settled ? "" : " (time cap reached before the energy threshold)");
+    progress(1.0, line.str());
+  }
 
   out.soil_hash = study::soilHash(study);
   out.backend = study::DepositionBackend::Builtin;

@@ -221,6 +221,7 @@ void DemSimulation::wallLoop(int tid) {
       ContactKinematics k = contactKinematics<true>(touch[a].normal.data(), touch[a].dist, radius_[i], 0,
                                                     &v_[3 * i], &w_[3 * i], vwall.data(), nullptr);
       k.wrel_norm = std::sqrt(norm2(k.wrel));
+      k.inv_ii = inv_inertia_[i];
       if (k.delta > local_max) local_max = k.delta;
       if (k.delta > overlapLimitFraction() * radius_[i] && bad < 0) bad = static_cast<std::int64_t>(i);
       const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wallMaterial(touch[a].wall)),

@@ -133,6 +133,7 @@ adapter::SettledSoil depositInInstance(const study::Study& study, const InputDec
   soil.settling.threshold_J = study.soil.settle_kinetic_energy_J;
   soil.settling.stages = 1;
   soil.settling.stages_capped = capped ? 1 : 0;
+  soil.settling.final_phase_capped = capped;
   soil.settling.simulated_s = t;
   soil.settling.surface_height_m = adapter::soilSurfaceHeight(soil.particles, study.soil.diameter_max_m);
   soil.settling.packing_fraction = adapter::packingFraction(soil.particles, study.soil);

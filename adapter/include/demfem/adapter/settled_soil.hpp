@@ -10,8 +10,8 @@
 //     uint32    format version (kSettledSoilFormatVersion)
 //     uint32    byte length H of the header
 //     H bytes   header, a JSON object: soil_hash (study::soilHash), deposition {backend, seed, cores},
-//               settling {kinetic_energy_J, threshold_J, stages, stages_capped, simulated_s,
-//               surface_height_m, packing_fraction}, particle_count
+//               settling {kinetic_energy_J, threshold_J, stages, stages_capped,
+//               final_phase_capped, simulated_s, surface_height_m, packing_fraction}, particle_count
 //     36 bytes per particle: x_m, y_m, z_m, radius_m (float64), layer (int32)
 //     uint64    FNV-1a 64 (study::fnv1a64) of every byte before it
 //   readSettledSoil() checks magic, version, header, length and checksum and throws
@@ -33,7 +33,7 @@
 
 namespace demfem::adapter {
 
-inline constexpr std::uint32_t kSettledSoilFormatVersion = 1;
+inline constexpr std::uint32_t kSettledSoilFormatVersion = 2;
 
 struct SoilParticle {
   std::array<double, 3> x_m{};
@@ -49,6 +49,7 @@ struct SettlingFigures {
   double threshold_J = 0;        // soil.settle_kinetic_energy_J it had to fall below
   std::int32_t stages = 0;       // settling phases of the deposition
   std::int32_t stages_capped = 0;  // phases that hit their time cap above the threshold
+  bool final_phase_capped = false; // the last phase, whose particles are kept, is one of them
   double simulated_s = 0;        // simulated deposition time
   double surface_height_m = 0;   // soilSurfaceHeight()
   double packing_fraction = 0;   // packingFraction()
@@ -84,13 +85,15 @@ double soilSurfaceHeight(const std::vector<SoilParticle>& particles, double diam
 // Particle volume over bin width x length x fill height.
 double packingFraction(const std::vector<SoilParticle>& particles, const study::Soil& soil);
 
-// Why the soil is not settled ("" if it is): a phase hit its time cap or the final kinetic energy is
-// not below the threshold.
+// Why the soil is not settled ("" if it is): the final phase hit its time cap or the final kinetic
+// energy is not below the threshold. An earlier phase that hit its cap only poured the next layer
+// onto a pack still moving; what is kept is the final phase's soil at rest.
 std::string unsettledReason(const SettlingFigures& settling);
 
 // The soil's figures as the JSON object text a run records ("soil" in sensors.json): file,
 // file_checksum, soil_hash, deposition_backend, deposition_seed, deposition_cores, particles,
-// settled, kinetic_energy_J, threshold_J, stages, stages_capped, simulated_s, surface_height_mm,
+// settled, kinetic_energy_J, threshold_J, stages, stages_capped, final_phase_capped, simulated_s,
+// surface_height_mm,
 // packing_fraction.
 std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path& file, const std::string& checksum);
 

@@ -138,6 +138,7 @@ struct ContactKinematics {
   double ri;          // radius of i (wall cohesion areas)
   double r;           // centre distance (pair) or centre-wall distance (wall)
   double rj;          // radius of j (pair), 0 for a wall
+  double inv_ii = 0, inv_ij = 0;  // 1 / moment of inertia of i and j (wall: 0 for j); edem-standard only
 };
 
 struct ContactResult {
@@ -218,6 +219,17 @@ template <study::NormalModel N>
   return -law.cohesion_J_m3 * area;
 }
 
+// Spin below which the edem-standard torque M = -mu_r Fn d w_hat falls linearly to zero: the spin
+// that M removes in one step, times kRollingStopContacts. A constant torque that reverses a spin
+// within a step feeds energy in: the spin chatters at about M dt / I and a pack never comes to rest
+// (docs/builtin-dem.md, "Rolling friction at rest"). Below this scale the torque is
+// -I w / (kRollingStopContacts dt) per contact, so that a particle with that many contacts only
+// stops, never reverses, in one step. 0 when inv_inertia is 0 (the law as EDEM states it).
+inline constexpr double kRollingStopContacts = 12;  // the densest coordination of equal spheres
+inline double rollingSpinScale(double torque, double inv_inertia, double dt) {
+  return kRollingStopContacts * torque * dt * inv_inertia;
+}
+
 // The complete contact: normal, cohesion, tangential (with or without history), rolling.
 // `hist` points to HistoryLayout::size doubles of this contact (may be null if size is 0).
 template <study::NormalModel N, study::RollingModel R>
@@ -268,8 +280,8 @@ template <study::NormalModel N, study::RollingModel R>
   // Rolling resistance.
   if constexpr (R == study::RollingModel::EdemStandard) {
     const double f = law.rolling_friction * std::max(0.0, fn_contact);
-    const double wim = std::sqrt(dot3(k.wi, k.wi));
-    const double wjm = std::sqrt(dot3(k.wj, k.wj));
+    const double wim = std::max(std::sqrt(dot3(k.wi, k.wi)), rollingSpinScale(f * k.di, k.inv_ii, dt));
+    const double wjm = std::max(std::sqrt(dot3(k.wj, k.wj)), rollingSpinScale(f * k.dj, k.inv_ij, dt));
     for (int c = 0; c < 3; ++c) {
       if (wim > 0) out.torque_i[c] -= f * k.di * k.wi[c] / wim;
       if (wjm > 0) out.torque_j[c] -= f * k.dj * k.wj[c] / wjm;

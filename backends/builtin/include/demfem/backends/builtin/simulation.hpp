@@ -95,6 +95,14 @@ class DemSimulation {
   int addPlane(const PlaneWall& wall);
   int addMesh(TriangleMesh mesh);
   void setGravity(const Vec3& g) { gravity_ = g; }
+  const Vec3& gravity() const { return gravity_; }
+  // Deposition only (docs/builtin-dem.md, "Deposition"): a background damping force -c m v and
+  // torque -c I w on every particle, c in 1/s (0 = none, the study's physics). It removes the
+  // elastic ringing that the hysteretic spring and the sticking tangential spring never dissipate,
+  // so that a pack comes to rest; it is not part of the saved state, and saveState() refuses a
+  // simulation with it on.
+  void setSettlingDamping(double rate_per_s);
+  double settlingDamping() const { return damping_per_s_; }
   // Sets the step; throws std::invalid_argument if dt <= 0 or above the stability limit.
   void setTimeStep(double dt);
   double timeStep() const { return dt_; }
@@ -221,11 +229,16 @@ class DemSimulation {
   int wallMaterial(int wall) const;
   void gatherWallContacts();
   void scatterWallForces();
-  void resetForce(std::size_t i) {  // gravity only, no torque: the start of every force evaluation
+  void resetForce(std::size_t i) {  // gravity (and settling damping) only: the start of every force evaluation
     for (int c = 0; c < 3; ++c) {
       f_[3 * i + c] = mass_[i] * gravity_[c];
       t_[3 * i + c] = 0;
     }
+    if (damping_per_s_ > 0)
+      for (int c = 0; c < 3; ++c) {
+        f_[3 * i + c] -= damping_per_s_ * mass_[i] * v_[3 * i + c];
+        t_[3 * i + c] -= damping_per_s_ * w_[3 * i + c] / inv_inertia_[i];
+      }
   }
   ContactStiffness wallStiffness(int i, int wall_material) const;
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
@@ -239,6 +252,7 @@ class DemSimulation {
   Domain domain_;
   int threads_;
   Vec3 gravity_{0, -9.81, 0};
+  double damping_per_s_ = 0;
   double dt_ = 0, time_ = 0;
   long step_ = 0;
   double skin_ = 0;
