@@ -1,7 +1,7 @@
 // Soil calibration and diagnosis benchmark (docs/calibration.md, "Soil against LIGGGHTS"): the
 // layered-bin fixture of the physics test (tests/campaign/liggghts_layered_bin.hpp, LIGGGHTS itself
-// from the deck kept with the test), by default the small bin of the issue (about 2,500 particles,
-// 200 mm stroke, depths 12, 30, 45 mm, five seeds); then `--preset layered-soil`, the single-layer
+// from the deck kept with the test), by default the small bin of the issue (about 2,570 particles,
+// 200 mm stroke, depths 20, 40, 55 mm, five seeds); then `--preset layered-soil`, the single-layer
 // fit at the shallowest depth and the diagnosis of the single-layer study, each timed. Prints a
 // table; --json writes the same numbers.
 #include "layered_soil_study.hpp"
@@ -35,10 +35,10 @@ int main(int argc, char** argv) {
   bool ci_bin = false, no_diagnosis = false, diagnosis_only = false;
   int diagnosis_seeds = 1, diagnosis_evaluations = 8;
   int max_evaluations = 12, model_seeds = 3;
-  double window_begin_mm = 50;
+  double window_begin_mm = 50, diagnosis_friction = 0.2;
   std::string out_dir = "bench-soil", recordings_dir;
   bin.seeds = 5;
-  app.add_flag("--ci-bin", ci_bin, "The physics test's bin (100 x 140 mm, 50 mm stroke, 3 seeds) instead of the small bin");
+  app.add_flag("--ci-bin", ci_bin, "The physics test's bin (100 x 140 mm, 40 mm stroke, 3 seeds) instead of the small bin (100 x 330 mm, 200 mm stroke)");
   app.add_option("--seeds", bin.seeds, "LIGGGHTS deposition seeds (1..5)")->check(CLI::Range(1, 5))->capture_default_str();
   app.add_option("--jobs", bin.jobs, "Runs at once (LIGGGHTS processes; cases of one evaluation)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--max-evaluations", max_evaluations, "Objective evaluations per fit")->check(CLI::PositiveNumber)->capture_default_str();
@@ -48,7 +48,12 @@ int main(int argc, char** argv) {
   app.add_option("--recordings", recordings_dir, "Use the LIGGGHTS recordings of an earlier run in this directory instead of running LIGGGHTS")
       ->check(CLI::ExistingDirectory);
   app.add_flag("--no-diagnosis", no_diagnosis, "Skip the diagnosis");
-  app.add_flag("--diagnosis-only", diagnosis_only, "Only the diagnosis of the single-layer study (no calibration)");
+  app.add_flag("--diagnosis-only", diagnosis_only,
+               "Only the diagnosis of the single-layer study at --diagnosis-friction (no calibration; otherwise the diagnosis starts from the "
+               "single layer fitted at the shallowest depth)");
+  app.add_option("--diagnosis-friction", diagnosis_friction, "Particle friction of the single-layer study of --diagnosis-only (the deck's top layer: 0.2)")
+      ->check(CLI::Range(0.05, 1.5))
+      ->capture_default_str();
   app.add_option("--diagnosis-seeds", diagnosis_seeds, "Model seeds of the diagnosis' runs")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--diagnosis-evaluations", diagnosis_evaluations, "Objective evaluations per fit of the diagnosis")
       ->check(CLI::PositiveNumber)
@@ -57,9 +62,9 @@ int main(int argc, char** argv) {
   app.callback([&] {
     if (ci_bin) {
       bin.seeds = std::min(bin.seeds, 3);
-      window_begin_mm = 15;
+      window_begin_mm = 10;
     } else {
-      bin.width_m = 0.12, bin.length_m = 0.33, bin.stroke_m = 0.2;
+      bin.length_m = 0.33, bin.stroke_m = 0.2;
     }
     const fs::path out(out_dir);
     fs::create_directories(out);
@@ -84,11 +89,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "diagnose: %s (%.0f s elapsed)\n", stage.c_str(), campaign::test::detail::secondsSince(start));
     };
     if (diagnosis_only) {
-      const std::string single_file = campaign::test::fixtureData("single_layer_bin.json").string();
-      const auto single = campaign::test::builtinStudy(bin, single_file);
-      campaign::SoilBinModel model(campaign::SoilForce::Draught, study::parseStudy(single.dump(), single_file));
       t = Clock::now();
-      const auto d = campaign::diagnose(single, single_file, recordings, model, diagnosis);
+      const auto d = campaign::test::diagnoseSingleLayer(bin, recordings, diagnosis, campaign::test::singleLayerStudy(bin, diagnosis_friction));
       std::printf("diagnosis: %s (%s), %.0f s\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str(),
                   campaign::test::detail::secondsSince(t));
       cli::writeJson(json_target, {{"diagnosis", campaign::toJson(d, diagnosis, "")},

@@ -4,7 +4,7 @@
 //     calibrated study's prediction of every depth;
 //  2. the single-layer built-in study fitted (the same preset: one stage) on the shallowest depth's
 //     recordings only, then its prediction of every depth;
-//  3. optionally `demfem diagnose` of the recordings with the single-layer study.
+//  3. optionally `demfem diagnose` of the recordings with the single-layer study fitted in 2.
 // The built-in model records the draught of the rigid plate (campaign::SoilForce::Draught), like
 // the deck, and packs its soils from the deposition of the study each step starts from (shared
 // packing, campaign/model.hpp). Per depth: the LIGGGHTS seeds' window means (mean, sample standard deviation) against
@@ -103,6 +103,23 @@ inline double secondsSince(std::chrono::steady_clock::time_point t) {
 
 }  // namespace detail
 
+// The single-layer built-in study of `bin`, its particle friction set to `static_friction` when given.
+inline nlohmann::ordered_json singleLayerStudy(const LayeredBin& bin, std::optional<double> static_friction) {
+  auto s = builtinStudy(bin, fixtureData("single_layer_bin.json"));
+  if (static_friction) s["soil"]["interactions"][0]["static_friction"] = *static_friction;  // the soil-soil pair
+  return s;
+}
+
+// `demfem diagnose` of `recordings` with `single`, a single-layer study of `bin`. The soil is
+// prepared (deposited) at the fixture study's friction whatever the study's: the deck's preparation
+// (deposit.in).
+inline Diagnosis diagnoseSingleLayer(const LayeredBin& bin, const std::vector<analysis::Recording>& recordings,
+                                     const DiagnosisSettings& settings, const nlohmann::ordered_json& single) {
+  const std::string single_file = fixtureData("single_layer_bin.json").string();
+  SoilBinModel model(SoilForce::Draught, study::parseStudy(singleLayerStudy(bin, std::nullopt).dump(), single_file));
+  return diagnose(single, single_file, recordings, model, settings);
+}
+
 inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vector<analysis::Recording>& recordings,
                                          const CalibrationOptions& options, const DiagnosisSettings* diagnosis) {
   LayeredSoilOutcome out;
@@ -124,7 +141,7 @@ inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vecto
   out.layered_wall_s = detail::secondsSince(t);
 
   const std::string single_file = fixtureData("single_layer_bin.json").string();
-  const auto single = builtinStudy(bin, single_file);
+  const auto single = singleLayerStudy(bin, std::nullopt);
   std::vector<analysis::Recording> shallow;
   for (const auto& r : recordings)
     if (r.key.depth_mm == seeds.begin()->first) shallow.push_back(r);
@@ -137,7 +154,7 @@ inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vecto
   for (const auto& [depth, values] : seeds) out.depths.push_back({depth, detail::seedMean(values), calibrated.at(depth), single_layer.at(depth)});
   if (diagnosis) {
     t = std::chrono::steady_clock::now();
-    out.diagnosis = diagnose(single, single_file, recordings, single_model, *diagnosis);
+    out.diagnosis = diagnoseSingleLayer(bin, recordings, *diagnosis, out.single.calibrated_study);
     out.diagnosis_wall_s = detail::secondsSince(t);
   }
   return out;

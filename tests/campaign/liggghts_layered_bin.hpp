@@ -13,26 +13,38 @@
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <atomic>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 namespace demfem::campaign::test {
 
+// The CI bin by default (docs/calibration.md, "Soil against LIGGGHTS"): 75 mm of soil, the interface
+// 30 mm below the fill height, depths 20 mm (two grains of cut, top layer only), 40 and 55 mm (the
+// tip 20 mm above the floor), 40 mm of stroke (the window ends before the soil ahead of the plate
+// reaches the end wall).
 struct LayeredBin {
-  double width_m = 0.1, length_m = 0.14, fill_m = 0.055, interface_m = 0.025;  // interface: depth below the fill
-  double start_z_m = 0.03, stroke_m = 0.05, velocity_m_s = 0.1, insertion_velocity_m_s = 0.1;
-  std::vector<double> depths_mm{12, 30, 45};
+  double width_m = 0.1, length_m = 0.14, fill_m = 0.075, interface_m = 0.03;  // interface: depth below the fill
+  double start_z_m = 0.03, stroke_m = 0.04, velocity_m_s = 0.1, insertion_velocity_m_s = 0.1;
+  std::vector<double> depths_mm{20, 40, 55};
   int seeds = 3;  // 1..seeds (at most 5)
   int jobs = 2;
   std::string tool = "plate";  // the tool name of the sidecars (the built-in study's tool)
+  // Set: a single-layer deck, this particle-particle friction everywhere (the drag's mu_top,
+  // mu_bottom, mu_between); the deposition is the same.
+  std::optional<double> uniform_friction;
 };
 
 // The built-in study of `bin` from one of the fixture studies (tests/campaign/data/layered_bin.json,
@@ -71,6 +83,12 @@ inline void runLiggghts(const std::filesystem::path& dir, const std::string& dec
                               "' -var deck '" + layeredBinDeck().string() + "' " + variables + " > '" + log + "' 2>&1";
   if (std::system(command.c_str()) != 0)
     throw std::runtime_error("LIGGGHTS run failed: " + command + " (see " + (dir / log).string() + ")");
+}
+
+inline std::string frictionVariables(const LayeredBin& bin) {
+  if (!bin.uniform_friction) return "";
+  const std::string mu = num(*bin.uniform_friction);
+  return " -var mu_top " + mu + " -var mu_bottom " + mu + " -var mu_between " + mu;
 }
 
 // Runs tasks on `jobs` threads; the first failure is rethrown after all finished.
@@ -121,7 +139,7 @@ inline std::vector<std::filesystem::path> runLayeredBin(const LayeredBin& bin, c
                             geometry + " -var soil " + soil + " -var depth " + detail::num(depth_mm / 1000) + " -var start_z " +
                                 detail::num(bin.start_z_m) + " -var stroke " + detail::num(bin.stroke_m) + " -var v " +
                                 detail::num(bin.velocity_m_s) + " -var v_insert " + detail::num(bin.insertion_velocity_m_s) +
-                                " -var csv " + stem + ".csv",
+                                detail::frictionVariables(bin) + " -var csv " + stem + ".csv",
                             stem + ".log");
         std::ofstream sidecar(dir / (stem + ".json"));
         sidecar << nlohmann::json{{"tool", bin.tool}, {"depth_mm", depth_mm}, {"repeat", seed}}.dump(2) << "\n";
@@ -133,6 +151,55 @@ inline std::vector<std::filesystem::path> runLayeredBin(const LayeredBin& bin, c
   detail::parallel(depositions, bin.jobs);
   detail::parallel(drags, bin.jobs);
   return recordings;
+}
+
+namespace detail {
+
+// FNV-1a of the deck's files and of every setting of `bin` that reaches LIGGGHTS: the name of the
+// recordings' cache.
+inline std::string deckKey(const LayeredBin& bin) {
+  std::ostringstream text;
+  for (const char* file : {"materials.in", "deposit.in", "drag.in", "plate.stl"}) {
+    std::ifstream in(layeredBinDeck() / file, std::ios::binary);
+    if (!in) throw std::runtime_error("cannot read " + (layeredBinDeck() / file).string());
+    text << in.rdbuf() << '\n';
+  }
+  text << num(bin.width_m) << num(bin.length_m) << num(bin.fill_m) << num(bin.interface_m) << num(bin.start_z_m) << num(bin.stroke_m)
+       << num(bin.velocity_m_s) << num(bin.insertion_velocity_m_s) << frictionVariables(bin);
+  for (double d : bin.depths_mm) text << ' ' << num(d);
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text.str()) h = (h ^ c) * 1099511628211ull;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
+}  // namespace detail
+
+// The recordings of `bin` from the cache `cache_dir`/<deck key>: run (runLayeredBin in a working
+// directory of this process) and copied there when any is missing, so that the tests of one build
+// run the deck once per bin. A recording enters the cache CSV first, its sidecar last (each by a
+// rename), so a cache entry with a sidecar is complete.
+inline std::vector<std::filesystem::path> cachedLayeredBin(const LayeredBin& bin, const std::filesystem::path& cache_dir) {
+  namespace fs = std::filesystem;
+  const fs::path dir = cache_dir / ("liggghts-" + detail::deckKey(bin));
+  std::vector<fs::path> cached;
+  for (int seed = 1; seed <= bin.seeds; ++seed)
+    for (double depth_mm : bin.depths_mm) cached.push_back(dir / ("seed" + std::to_string(seed) + "_" + detail::num(depth_mm) + "mm.csv"));
+  bool complete = true;
+  for (const auto& f : cached) complete = complete && fs::exists(fs::path(f).replace_extension(".json"));
+  if (complete) return cached;
+  const fs::path work = cache_dir / ("work-" + std::to_string(::getpid()));
+  const auto made = runLayeredBin(bin, work);
+  fs::create_directories(dir);
+  for (const auto& f : made)
+    for (const char* ext : {".csv", ".json"}) {
+      const fs::path from = fs::path(f).replace_extension(ext), to = dir / from.filename();
+      fs::copy_file(from, fs::path(to).concat(".part"), fs::copy_options::overwrite_existing);
+      fs::rename(fs::path(to).concat(".part"), to);
+    }
+  fs::remove_all(work);
+  return cached;
 }
 
 }  // namespace demfem::campaign::test
