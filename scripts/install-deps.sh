@@ -9,6 +9,7 @@ packages=(
   catch2 libcli11-dev libnlopt-cxx-dev libnlopt-dev
   liggghts libliggghts-dev openmpi-bin libopenmpi-dev
   calculix-ccx python3-zmq python3-numpy gnuplot-nox
+  libvtk9-dev
   clang libclang-rt-dev libomp-dev
 )
 missing=()

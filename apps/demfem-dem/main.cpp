@@ -37,27 +37,12 @@ std::chrono::milliseconds millis(double seconds) {
   return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
 }
 
-// A soil deposited by the other backend than the one serving is deposited here (this process,
-// before the backend is built) when its file is missing; the serving backend deposits its own.
-void provideSoil(const study::Study& study, const std::string& backend) {
-  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
-  const std::string& deposition = study.soil.deposition_backend;
-  if (std::filesystem::exists(file) || deposition == backend) return;
-  std::cerr << "demfem-dem: depositing the soil with " << deposition << " into " << file.string() << std::endl;
-  cli::DepositCost cost;
-  adapter::writeSettledSoil(file, cli::depositWith(study.soil.deposition_backend, study, study.dem.threads, cost, false));
-}
-
 std::unique_ptr<adapter::CouplingApi> makeBackend(const Options& o, const cli::BackendEntry& backend,
                                                    const std::optional<study::Study>& study) {
   if (!backend.capabilities.simulates_soil) return backend.make(study, o.load);
   const std::string& name = backend.capabilities.name;
   if (!study) throw cli::InputError("--study is required for the '" + name + "' backend");
-  provideSoil(*study, name);
-  auto api = backend.make(study, o.load);
-  const auto file = adapter::settledSoilFile(*study, adapter::defaultSoilDirectory());
-  cli::requireSettled(adapter::readSettledSoil(file, *study), file, o.allow_unsettled_soil);
-  return api;
+  return cli::openSoilBackend(backend, *study, o.allow_unsettled_soil);
 }
 
 void run(const Options& o) {

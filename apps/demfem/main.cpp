@@ -16,5 +16,7 @@ int main(int argc, char** argv) {
   demfem::cli::addCalibrateCommand(app);
   demfem::cli::addDiagnoseCommand(app);
   demfem::cli::addCampaignCommand(app);
+  demfem::cli::addCptCommand(app);
+  demfem::cli::addSoilMotionCommand(app);
   return demfem::cli::runApp(app, argc, argv);
 }

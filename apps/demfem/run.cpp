@@ -186,6 +186,16 @@ void runLocal(const RunOptions& o, const std::string& json_target) {
   const study::Study study = cli::loadCheckedStudy(o.study_file);  // validate before starting anything
   if (study.kind == study::StudyKind::WeightDrop)
     throw InputError(o.study_file + ": a weight-drop study has no DEM side; run it with: demfem-fem weight-drop " + o.study_file);
+  if (study.kind == study::StudyKind::ConePenetration) {  // no FEM side: the cones are pushed in this process
+    CptOptions cpt;
+    cpt.output_dir = o.output_dir.empty() ? study.output.directory.string() : o.output_dir;
+    cpt.backend = o.backend;
+    cpt.threads = o.threads;
+    cpt.allow_unsettled_soil = o.allow_unsettled_soil;
+    cpt.quiet = o.quiet;
+    runConePenetration({o.study_file}, cpt, json_target);
+    return;
+  }
   const std::string& backend = o.backend.empty() ? study.dem.backend : o.backend;
   if (study::hasSoil(study.kind) && findBackend(backend).capabilities.simulates_soil) {
     // A soil already deposited is checked before anything starts (demfem-dem checks one it deposits).

@@ -6,6 +6,7 @@
 #include "demfem/fem/model.hpp"
 #include "demfem/fem/sensors.hpp"
 #include "demfem/study/tool_motion.hpp"
+#include "demfem/vtkio/vtk_files.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -253,7 +254,7 @@ struct CoupledDriver::Impl {
       dem().setNodePositions(tool_.name, deformedPositions(*u));
       r = sensors_->read(*u, integrator_->reactions());
     }
-    if (study_.output.vtk_every > 0 && s.step % study_.output.vtk_every == 0) writeVtk(s, u);
+    if (study_.output.vtk_every > 0 && s.step % study_.output.vtk_every == 0) writeVtk(s, u, forces);
     dem().simulate(dt_);
     ++s.step;
     last_ = r;
@@ -278,27 +279,25 @@ struct CoupledDriver::Impl {
   fs::path vtkDirectory() const { return options_.output_dir / "vtk"; }
 
   // The tool as the DEM simulates it from now on (positions just sent), at the DEM's time, named by
-  // the FEM step that begins now.
-  void writeVtk(const DriverState& s, const Eigen::VectorXd* u) {
+  // the FEM step that begins now: a .vtu (vtkio) with node displacement_m and the node force_N applied.
+  void writeVtk(const DriverState& s, const Eigen::VectorXd* u, const NodeArray& forces) {
     const double t = dem().time();
     const auto m = motionOfStep(s.step, s.plan_start_s);
     const NodeArray local = u ? deformedPositions(*u) : received_;
-    std::ostringstream out;
-    out << "# vtk DataFile Version 3.0\ndemfem FEM tool " << tool_.name << " t_s=" << number(t)
-        << " (bin frame, m)\nASCII\nDATASET POLYDATA\nPOINTS " << node_count_ << " double\n";
-    for (int i = 0; i < node_count_; ++i) {
-      for (int c = 0; c < 3; ++c)
-        out << number(local[3 * i + c] + m.origin_m[c] + m.velocity_m_s[c] * (t - m.t0_s)) << (c < 2 ? ' ' : '\n');
-    }
-    out << "POLYGONS " << triangles_.size() << ' ' << 4 * triangles_.size() << '\n';
-    for (const auto& tri : triangles_) out << "3 " << tri[0] << ' ' << tri[1] << ' ' << tri[2] << '\n';
-    out << "POINT_DATA " << node_count_ << "\nVECTORS displacement_m double\n";
+    vtkio::Dataset d;
+    d.time_s = t;
+    vtkio::PointArray displacement{"displacement_m", 3, {}, vtkio::ValueType::Float64};
     for (int i = 0; i < node_count_; ++i)
-      for (int c = 0; c < 3; ++c) out << number(local[3 * i + c] - received_[3 * i + c]) << (c < 2 ? ' ' : '\n');
+      for (int c = 0; c < 3; ++c) {
+        d.points.push_back(local[3 * i + c] + m.origin_m[c] + m.velocity_m_s[c] * (t - m.t0_s));
+        displacement.values.push_back(local[3 * i + c] - received_[3 * i + c]);
+      }
+    for (const auto& tri : triangles_) d.triangles.push_back({tri[0], tri[1], tri[2]});
+    d.arrays = {displacement, {"force_N", 3, forces, vtkio::ValueType::Float64}};
     char name[24];
-    std::snprintf(name, sizeof name, "_%06lld.vtk", static_cast<long long>(s.step));
+    std::snprintf(name, sizeof name, "_%06lld.vtu", static_cast<long long>(s.step));
     const std::string file = "fem-" + tool_.name + name;
-    adapter::writeFileAtomically(vtkDirectory() / file, out.str());
+    adapter::writeFileAtomically(vtkDirectory() / file, vtkio::encode(d, vtkio::Format::UnstructuredGrid));
     vtk_series_->add(t, file);
   }
 

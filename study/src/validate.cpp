@@ -64,7 +64,9 @@ class Checker {
         break;
       case GeometryKind::Gmsh:
       case GeometryKind::MatrixMarket: lengths = lengths && ok("/geometry/length_mm"); break;
-      case GeometryKind::Cone: lengths = lengths && ok("/geometry/area_mm2"); break;
+      case GeometryKind::Cone:
+        lengths = lengths && ok("/geometry/area_mm2") && ok("/geometry/apex_angle_deg") && ok("/geometry/length_mm");
+        break;
     }
     const bool cone = tool.geometry.kind == GeometryKind::Cone;
     ToolFacts f{path};
@@ -240,6 +242,10 @@ class Checker {
                                                "), got " + mm(value));
         }
       }
+      if (cone && !facts_.bad(path + "/geometry/length_mm") && !facts_.bad(path + "/geometry/area_mm2") &&
+          !facts_.bad(path + "/geometry/apex_angle_deg") && length <= g.coneHeight_m())
+        issues_.add(path + "/geometry/length_mm", "must exceed the cone's height (" + mm(g.coneHeight_m()) +
+                                                      ", from area_mm2 and apex_angle_deg), got " + mm(length));
       if (study_.weight_drop && source.constraints_ok &&
           study_.weight_drop->pan_rows_from_tip_m >= length - c.clamp_length_m)
         issues_.add("/weight_drop/pan_rows_from_tip_mm", "must be < the free length of the tool (" +
@@ -251,12 +257,14 @@ class Checker {
       if (m.depth_m >= s.fill_height_m)
         issues_.add(mpath + "/depth_mm", "must be < soil.fill_height_mm (" + mm(s.fill_height_m) + "), got " +
                                              mm(m.depth_m));
+      if (cone && m.depth_m >= length)
+        issues_.add(mpath + "/depth_mm", "must be < the penetrometer length (" + mm(length) + "), got " + mm(m.depth_m));
       if (!cone && source.constraints_ok && m.depth_m >= length - c.clamp_length_m)
         issues_.add(mpath + "/depth_mm", "must be < the tool length minus the clamp (" +
                                              mm(length - c.clamp_length_m) + "), got " + mm(m.depth_m));
       // Footprint in the bin (x across, z along). start_z is the front face of a plate (its back face
       // trails by the thickness) and the axis of a cone.
-      const double half_x = cone ? std::sqrt(g.cone_area_m2 / std::numbers::pi) : g.width_m / 2;
+      const double half_x = cone ? g.coneRadius_m() : g.width_m / 2;
       const double behind = cone ? half_x : (g.kind == GeometryKind::Plate ? g.thickness_m : 0.0);
       const double ahead = cone ? half_x : m.stroke_m;
       if (g.kind == GeometryKind::Plate || cone) {
@@ -288,8 +296,7 @@ class Checker {
         const Tool& b = study_.tools[j];
         if (a.geometry.kind != GeometryKind::Cone || b.geometry.kind != GeometryKind::Cone) continue;
         if (!tools_[i].motion_ok || !tools_[j].motion_ok) continue;
-        const double reach = std::sqrt(a.geometry.cone_area_m2 / std::numbers::pi) +
-                             std::sqrt(b.geometry.cone_area_m2 / std::numbers::pi);
+        const double reach = a.geometry.coneRadius_m() + b.geometry.coneRadius_m();
         const double distance = std::hypot(a.motion.center_x_m - b.motion.center_x_m,
                                            a.motion.start_z_m - b.motion.start_z_m);
         if (distance < reach)
@@ -320,7 +327,9 @@ class Checker {
       double area = 0;  // surface carrying keypoints; meshes from files bring their own
       if (g.kind == GeometryKind::Plate)
         area = 2 * (g.length_m * g.width_m + g.length_m * g.thickness_m + g.width_m * g.thickness_m);
-      if (g.kind == GeometryKind::Cone) area = g.cone_area_m2 * (1 + 1 / std::sin(g.cone_angle_rad / 2));
+      if (g.kind == GeometryKind::Cone)  // cone mantle, shaft mantle above the cone, top disc
+        area = g.cone_area_m2 * (2 + 1 / std::sin(g.cone_angle_rad / 2)) +
+               2 * std::numbers::pi * g.coneRadius_m() * std::max(0.0, g.length_m - g.coneHeight_m());
       if (area / (spacing * spacing) > kMaxKeypoints)
         issues_.add(tools_[i].path + "/geometry/keypoint_spacing_mm",
                     "gives about " + formatNumber(std::round(area / (spacing * spacing))) +

@@ -1,20 +1,22 @@
 # Fails when a library includes a header of a library it may not depend on (docs/architecture.md section 1),
-# or when LIGGGHTS/MPI headers appear outside the LIGGGHTS backend's .cpp files (pimpl rule).
+# or when LIGGGHTS/MPI headers appear outside the LIGGGHTS backend's .cpp files and VTK headers outside
+# vtkio/src/vtk_files.cpp (pimpl rule).
 # Usage: cmake -DSOURCE_DIR=<root> -P check_layers.cmake
 set(allowed_study "study")
 set(allowed_protocol "protocol")
+set(allowed_vtkio "vtkio")
 set(allowed_adapter "adapter;protocol;study")
-set(allowed_fem "fem;adapter;study")
+set(allowed_fem "fem;adapter;vtkio;study")
 # The DEM formulas both backends share: above study, below the backends.
 set(allowed_backends/physics "backends/physics;study")
-set(allowed_backends/builtin "backends/builtin;backends/physics;adapter;study")
+set(allowed_backends/builtin "backends/builtin;backends/physics;adapter;vtkio;study")
 set(allowed_backends/liggghts "backends/liggghts;backends/physics;adapter;study")
-set(allowed_analysis "analysis")
+set(allowed_analysis "analysis;vtkio")
 # campaign reruns the model: above fem, the backends and analysis (analysis stays simulation-free).
-set(allowed_campaign "campaign;analysis;fem;backends/builtin;backends/physics;adapter;study")
+set(allowed_campaign "campaign;analysis;vtkio;fem;backends/builtin;backends/physics;adapter;study")
 
 set(violations "")
-foreach(layer study protocol adapter fem backends/physics backends/builtin backends/liggghts analysis campaign)
+foreach(layer study protocol vtkio adapter fem backends/physics backends/builtin backends/liggghts analysis campaign)
   file(GLOB_RECURSE files ${SOURCE_DIR}/${layer}/*.hpp ${SOURCE_DIR}/${layer}/*.h ${SOURCE_DIR}/${layer}/*.cpp)
   foreach(f ${files})
     file(STRINGS ${f} includes REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"]demfem/")
@@ -44,6 +46,18 @@ foreach(f ${all_sources})
   file(STRINGS ${f} ext REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"](mpi\\.h|lammps\\.h|library\\.h|liggghts/)")
   if(ext)
     string(APPEND violations "  ${rel}: LIGGGHTS/MPI headers belong only in backends/liggghts/src/*.cpp (${ext})\n")
+  endif()
+endforeach()
+
+# VTK only inside vtkio/src/vtk_files.cpp (the one .cpp behind vtkio/include/demfem/vtkio/vtk_files.hpp).
+foreach(f ${all_sources})
+  file(RELATIVE_PATH rel ${SOURCE_DIR} ${f})
+  if(rel MATCHES "^(build|tests/architecture)" OR rel STREQUAL "vtkio/src/vtk_files.cpp")
+    continue()
+  endif()
+  file(STRINGS ${f} ext REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"](vtk[A-Z][A-Za-z0-9]*\\.h)")
+  if(ext)
+    string(APPEND violations "  ${rel}: VTK headers belong only in vtkio/src/vtk_files.cpp (${ext})\n")
   endif()
 endforeach()
 

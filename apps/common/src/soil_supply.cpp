@@ -18,4 +18,27 @@ void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::pat
                    "or run on it anyway with --allow-unsettled-soil");
 }
 
+namespace {
+
+// A soil deposited by the other backend than the one serving is deposited here (this process,
+// before the backend is built) when its file is missing; the serving backend deposits its own.
+void provideSoil(const study::Study& study, const std::string& backend) {
+  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+  const std::string& deposition = study.soil.deposition_backend;
+  if (std::filesystem::exists(file) || deposition == backend) return;
+  std::cerr << "depositing the soil with " << deposition << " into " << file.string() << std::endl;
+  DepositCost cost;
+  adapter::writeSettledSoil(file, depositWith(study.soil.deposition_backend, study, study.dem.threads, cost, false));
+}
+
+}  // namespace
+
+std::unique_ptr<adapter::CouplingApi> openSoilBackend(const BackendEntry& backend, const study::Study& study, bool allow_unsettled) {
+  provideSoil(study, backend.capabilities.name);
+  auto api = backend.make(study, adapter::TestLoad{});
+  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+  requireSettled(adapter::readSettledSoil(file, study), file, allow_unsettled);
+  return api;
+}
+
 }  // namespace demfem::cli

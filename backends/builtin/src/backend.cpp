@@ -2,7 +2,7 @@
 
 #include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/adapter/output_files.hpp"
-#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/adapter/tool_surface.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/physics/time_step.hpp"
@@ -215,7 +215,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
   // tool files of the same instant carry the same number and time).
   void writeVtk() {
     char index[24];
-    std::snprintf(index, sizeof(index), "_%06lld.vtk", static_cast<long long>(std::llround(sim_.time() / study_.fem.dt_s)));
+    std::snprintf(index, sizeof(index), "_%06lld.vtp", static_cast<long long>(std::llround(sim_.time() / study_.fem.dt_s)));
     const std::string particles = std::string("particles") + index;
     sim_.writeParticlesVtk(vtkDirectory() / particles);
     vtk_series_.at("particles").add(sim_.time(), particles);
@@ -243,11 +243,12 @@ class BuiltinBackend final : public adapter::CouplingApi {
 }  // namespace
 
 TriangleMesh toolMesh(const study::Tool& tool) {
-  if (tool.geometry.kind != study::GeometryKind::Plate)
-    throw CouplingError(ErrorCode::Unsupported, "builtin DEM: tool '" + tool.name +
-                                                    "': only plate tools are meshed by the builtin backend so far");
-  const auto surface = adapter::makePlateSurface(tool.geometry.length_m, tool.geometry.width_m, tool.geometry.thickness_m,
-                                                 tool.geometry.keypoint_spacing_m);
+  adapter::ToolSurface surface;
+  try {
+    surface = adapter::toolSurface(tool);
+  } catch (const std::invalid_argument& e) {
+    throw CouplingError(ErrorCode::Unsupported, std::string("builtin DEM: ") + e.what());
+  }
   TriangleMesh mesh;
   mesh.name = tool.name;
   for (const auto& n : surface.nodes) mesh.rest_nodes.push_back({n[0], n[1], n[2]});

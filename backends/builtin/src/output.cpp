@@ -1,44 +1,38 @@
-// Particle and mesh VTK output of the built-in DEM (docs/builtin-dem.md, "Output").
+// Particle and mesh ParaView output of the built-in DEM (docs/builtin-dem.md, "Output"): XML VTK
+// through vtkio (vtkio/include/demfem/vtkio/vtk_files.hpp), written atomically.
 #include "demfem/backends/builtin/simulation.hpp"
 
 #include "demfem/adapter/output_files.hpp"
-
-#include <sstream>
+#include "demfem/vtkio/vtk_files.hpp"
 
 namespace demfem::builtin {
 
 void DemSimulation::writeParticlesVtk(const std::filesystem::path& file) const {
-  std::ostringstream out;
   const std::size_t n = particleCount();
-  out << "# vtk DataFile Version 3.0\ndemfem builtin DEM particles t = " << time_ << " s\nASCII\nDATASET POLYDATA\n";
-  out << "POINTS " << n << " double\n";
-  out.precision(9);
-  for (std::size_t i = 0; i < n; ++i) out << x_[3 * i] << ' ' << x_[3 * i + 1] << ' ' << x_[3 * i + 2] << '\n';
-  out << "VERTICES " << n << ' ' << 2 * n << '\n';
-  for (std::size_t i = 0; i < n; ++i) out << "1 " << i << '\n';
-  out << "POINT_DATA " << n << "\nSCALARS radius_m double 1\nLOOKUP_TABLE default\n";
-  for (std::size_t i = 0; i < n; ++i) out << radius_[i] << '\n';
-  out << "SCALARS layer int 1\nLOOKUP_TABLE default\n";
-  for (std::size_t i = 0; i < n; ++i) out << layer_[i] << '\n';
-  out << "VECTORS velocity_m_s double\n";
-  for (std::size_t i = 0; i < n; ++i) out << v_[3 * i] << ' ' << v_[3 * i + 1] << ' ' << v_[3 * i + 2] << '\n';
-  adapter::writeFileAtomically(file, out.str());
+  vtkio::Dataset d;
+  d.time_s = time_;
+  d.points = x_;
+  vtkio::PointArray layer{"layer", 1, std::vector<double>(layer_.begin(), layer_.end()), vtkio::ValueType::Int32};
+  vtkio::PointArray force{"force_N", 3, std::vector<double>(3 * n), vtkio::ValueType::Float64};
+  for (std::size_t i = 0; i < n; ++i)  // the contact force: the last evaluation's total minus gravity
+    for (int c = 0; c < 3; ++c) force.values[3 * i + c] = f_[3 * i + c] - mass_[i] * gravity_[c];
+  d.arrays = {{"radius_m", 1, radius_, vtkio::ValueType::Float64}, {"velocity_m_s", 3, v_, vtkio::ValueType::Float64}, layer, force};
+  adapter::writeFileAtomically(file, vtkio::encode(d, vtkio::Format::PolyData));
 }
 
 void DemSimulation::writeMeshVtk(int m, const std::filesystem::path& file) const {
-  std::ostringstream out;
-  const auto& nodes = mesh_bin_nodes_.at(m);
-  const auto& tris = meshes_[m].triangles;
-  out << "# vtk DataFile Version 3.0\ndemfem builtin DEM mesh " << meshes_[m].name << " t = " << time_
-      << " s\nASCII\nDATASET POLYDATA\nPOINTS " << nodes.size() << " double\n";
-  out.precision(17);  // round trip: the FEM client's files of the same instant compare to round-off
-  for (const auto& p : nodes) out << p[0] << ' ' << p[1] << ' ' << p[2] << '\n';
-  out << "POLYGONS " << tris.size() << ' ' << 4 * tris.size() << '\n';
-  for (const auto& t : tris) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
-  out << "POINT_DATA " << nodes.size() << "\nVECTORS force_N double\n";
-  const auto& f = mesh_force_[m];
-  for (std::size_t k = 0; k < nodes.size(); ++k) out << f[3 * k] << ' ' << f[3 * k + 1] << ' ' << f[3 * k + 2] << '\n';
-  adapter::writeFileAtomically(file, out.str());
+  const TriangleMesh& mesh = meshes_[m];
+  vtkio::Dataset d;
+  d.time_s = time_;
+  vtkio::PointArray displacement{"displacement_m", 3, {}, vtkio::ValueType::Float64};
+  for (std::size_t k = 0; k < mesh.nodes.size(); ++k)
+    for (int c = 0; c < 3; ++c) {
+      d.points.push_back(mesh_bin_nodes_.at(m)[k][c]);
+      displacement.values.push_back(mesh.nodes[k][c] - mesh.rest_nodes[k][c]);
+    }
+  for (const auto& t : mesh.triangles) d.triangles.push_back({t[0], t[1], t[2]});
+  d.arrays = {displacement, {"force_N", 3, mesh_force_[m], vtkio::ValueType::Float64}};
+  adapter::writeFileAtomically(file, vtkio::encode(d, vtkio::Format::PolyData));
 }
 
 }  // namespace demfem::builtin

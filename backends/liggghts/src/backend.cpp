@@ -63,7 +63,7 @@ class NodeArrayAccess : public LAMMPS_NS::MeshMover {
 
 struct ToolState {
   std::string name;
-  adapter::PlateSurface surface;
+  adapter::ToolSurface surface;
   LAMMPS_NS::FixMeshSurface* mesh_fix = nullptr;
   std::unique_ptr<NodeArrayAccess> node_access;
   int id_offset = 0;                 // LIGGGHTS triangle id of surface triangle 0

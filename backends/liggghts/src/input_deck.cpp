@@ -194,9 +194,9 @@ void validateForLiggghts(const study::Study& study, const std::vector<std::strin
   for (std::size_t i = 0; i < study.tools.size(); ++i) {
     const auto& tool = study.tools[i];
     const std::string where = "tools[" + std::to_string(i) + "]";
-    if (tool.geometry.kind != study::GeometryKind::Plate)
+    if (tool.geometry.kind != study::GeometryKind::Plate && tool.geometry.kind != study::GeometryKind::Cone)
       throw CouplingError(ErrorCode::Unsupported,
-                          where + ".geometry: the liggghts backend builds plate tools only (keypoint surface)");
+                          where + ".geometry: the liggghts backend builds plate and cone tools only (keypoint surface)");
     requirePositive(tool.motion.depth_m, where + ".motion.depth_m");
   }
 }
@@ -210,19 +210,19 @@ int atomType(const study::Study& study, const std::string& material) {
   return typeOf(materials, material);
 }
 
-adapter::PlateSurface toolSurface(const study::Study& study, std::size_t tool_index) {
-  const auto& g = study.tools.at(tool_index).geometry;
-  if (g.kind != study::GeometryKind::Plate)
-    throw CouplingError(ErrorCode::Unsupported, "tools[" + std::to_string(tool_index) +
-                                                    "].geometry: the liggghts backend builds plate tools only");
-  return adapter::makePlateSurface(g.length_m, g.width_m, g.thickness_m, g.keypoint_spacing_m);
+adapter::ToolSurface toolSurface(const study::Study& study, std::size_t tool_index) {
+  try {
+    return adapter::toolSurface(study.tools.at(tool_index));
+  } catch (const std::invalid_argument& e) {
+    throw CouplingError(ErrorCode::Unsupported, "tools[" + std::to_string(tool_index) + "].geometry: " + e.what());
+  }
 }
 
 std::array<double, 3> toolStartOrigin(const study::Study& study, std::size_t tool_index) {
   return study::planToolMotion(study, study.tools.at(tool_index)).start_m;
 }
 
-void writeToolStl(const adapter::PlateSurface& surface, const std::array<double, 3>& origin,
+void writeToolStl(const adapter::ToolSurface& surface, const std::array<double, 3>& origin,
                   const std::filesystem::path& file) {
   std::ofstream out(file);
   if (!out) throw CouplingError(ErrorCode::Internal, "cannot write the tool surface file " + file.string());
@@ -268,11 +268,13 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   for (std::size_t i = 0; i < study.tools.size(); ++i) {
     const auto& tool = study.tools[i];
     const auto origin = toolStartOrigin(study, i);
-    z_lo = std::min(z_lo, origin[2] - tool.geometry.thickness_m);
-    z_hi = std::max(z_hi, origin[2] + tool.motion.stroke_m + 2 * tool.geometry.thickness_m);
-    y_hi = std::max(y_hi, origin[1] + tool.geometry.length_m);
-    x_lo = std::min(x_lo, origin[0] - tool.geometry.width_m / 2);
-    x_hi = std::max(x_hi, origin[0] + tool.geometry.width_m / 2);
+    const auto surface = toolSurface(study, i);
+    const double depth_z = surface.hi[2] - surface.lo[2];
+    z_lo = std::min(z_lo, origin[2] + surface.lo[2] - 0.5 * depth_z);
+    z_hi = std::max(z_hi, origin[2] + tool.motion.stroke_m + surface.hi[2] + 1.5 * depth_z);
+    y_hi = std::max(y_hi, origin[1] + surface.hi[1]);
+    x_lo = std::min(x_lo, origin[0] + surface.lo[0]);
+    x_hi = std::max(x_hi, origin[0] + surface.hi[0]);
   }
   const double margin = 0.1 * std::max(soil.bin_length_m, y_hi) + 4 * r_max;
   auto& s = deck.setup;
@@ -382,13 +384,12 @@ InputDeck translateStudy(const study::Study& study, const std::filesystem::path&
   // Room for the tools: particles within r_max of a tool's start position are removed before the
   // tool's mesh appears (the tool is inserted into the settled soil).
   for (std::size_t i = 0; i < study.tools.size(); ++i) {
-    const auto& g = study.tools[i].geometry;
+    const auto surface = toolSurface(study, i);
     const auto origin = toolStartOrigin(study, i);
     const std::string id = "tool" + std::to_string(i) + "_space";
-    deck.tool_clearance.push_back(
-        "region " + id + " block " + num(origin[0] - g.width_m / 2 - r_max) + " " + num(origin[0] + g.width_m / 2 + r_max) +
-        " " + num(origin[1] - r_max) + " " + num(origin[1] + g.length_m + r_max) + " " +
-        num(origin[2] - g.thickness_m / 2 - r_max) + " " + num(origin[2] + g.thickness_m / 2 + r_max) + " units box");
+    std::string block;
+    for (int c = 0; c < 3; ++c) block += " " + num(origin[c] + surface.lo[c] - r_max) + " " + num(origin[c] + surface.hi[c] + r_max);
+    deck.tool_clearance.push_back("region " + id + " block" + block + " units box");
     deck.tool_clearance.push_back("delete_atoms region " + id + " compress yes");
   }
   // Tools: one stress mesh each, a single mesh wall over all of them, a variable-velocity mover.

@@ -9,6 +9,8 @@
 #include "support/small_study.hpp"
 #include "support/temp_dir.hpp"
 
+#include "demfem/vtkio/vtk_files.hpp"
+
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
@@ -49,30 +51,10 @@ study::Study smallCoupledStudy(const fs::path& out) {
   return study::parseStudy(doc.dump(), "quick.json (small bin, builtin coupled test)");
 }
 
-// POINTS of a legacy VTK polydata file (x y z per point).
-std::vector<double> vtkPoints(const fs::path& file) {
-  std::istringstream in(readText(file));
-  std::string word;
-  while (in >> word && word != "POINTS") {
-  }
-  std::size_t n = 0;
-  in >> n >> word;
-  std::vector<double> xyz(3 * n);
-  for (double& v : xyz) in >> v;
-  REQUIRE(in);
-  return xyz;
-}
-
-// file -> timestep of a .pvd collection.
+// file -> timestep of a .pvd collection, read by VTK's XML parser.
 std::map<std::string, double> pvdEntries(const fs::path& file) {
   std::map<std::string, double> entries;
-  std::istringstream in(readText(file));
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto t = line.find("timestep=\""), f = line.find("file=\"");
-    if (t == std::string::npos || f == std::string::npos) continue;
-    entries[line.substr(f + 6, line.find('"', f + 6) - f - 6)] = std::stod(line.substr(t + 10));
-  }
+  for (const auto& e : vtkio::readCollection(file)) entries[e.file.filename().string()] = e.time_s;
   return entries;
 }
 
@@ -111,13 +93,19 @@ TEST_CASE("a coupled run on the builtin DEM moves the tool once: down from the p
   CHECK(pvdEntries(vtk / "particles.pvd").size() == dem_series.size());
   double largest_gap = 0;
   for (const auto& [fem_file, fem_time] : fem_series) {
-    const std::string dem_file = "dem-" + fem_file.substr(4);  // fem-TOOL_NNNNNN.vtk -> dem-TOOL_NNNNNN.vtk
+    // fem-TOOL_NNNNNN.vtu -> dem-TOOL_NNNNNN.vtp
+    const std::string dem_file = "dem-" + fem_file.substr(4, fem_file.size() - 8) + ".vtp";
     INFO(fem_file << " at t = " << fem_time << " s");
     REQUIRE(dem_series.count(dem_file) == 1);
     CHECK(dem_series.at(dem_file) == fem_time);
     const int step = std::stoi(fem_file.substr(9, 6));
     CHECK(fem_time == Approx(step * study.fem.dt_s).margin(1e-12));
-    const auto a = vtkPoints(vtk / fem_file), b = vtkPoints(vtk / dem_file);
+    const auto fem_data = vtkio::read(vtk / fem_file), dem_data = vtkio::read(vtk / dem_file);
+    CHECK(fem_data.time_s == fem_time);  // each file's own time is the collection's
+    CHECK(dem_data.time_s == fem_time);
+    CHECK(fem_data.triangles == dem_data.triangles);
+    CHECK(fem_data.array("force_N").values.size() == dem_data.array("force_N").values.size());
+    const auto &a = fem_data.points, &b = dem_data.points;
     REQUIRE(a.size() == b.size());
     for (std::size_t v = 0; v < a.size(); ++v) largest_gap = std::max(largest_gap, std::abs(a[v] - b[v]));
   }

@@ -1,6 +1,7 @@
 // STL import and VTK output of the builtin DEM.
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/triangle_mesh.hpp"
+#include "demfem/vtkio/vtk_files.hpp"
 #include "test_soil.hpp"
 
 #include <catch2/catch.hpp>
@@ -71,38 +72,6 @@ void checkTetrahedron(const TriangleMesh& mesh, double scale) {
   for (int u : uses) CHECK(u == 3);
 }
 
-// The count after `keyword` ("POINTS 3 double") in a legacy VTK file.
-std::size_t vtkCount(const std::string& text, const std::string& keyword) {
-  std::istringstream in(text.substr(text.find(keyword) + keyword.size()));
-  std::size_t count = 0;
-  in >> count;
-  return count;
-}
-
-// The `rows` lines of numbers after the line that starts with `header`.
-std::vector<std::vector<double>> vtkRows(const std::string& text, const std::string& header, std::size_t rows) {
-  const auto at = text.find(header);
-  if (at == std::string::npos) return {};
-  std::istringstream in(text.substr(at));
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::vector<double>> out;
-  for (std::size_t i = 0; i < rows && std::getline(in, line); ++i) {
-    std::istringstream fields(line);
-    std::vector<double> row;
-    for (double v; fields >> v;) row.push_back(v);
-    out.push_back(row);
-  }
-  return out;
-}
-
-std::string slurp(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 }  // namespace
 
 TEST_CASE("ASCII and binary STL files give the same merged mesh in metres", "[builtin]") {
@@ -122,7 +91,7 @@ TEST_CASE("a truncated or missing STL file is refused with its name and the prob
   CHECK_THROWS_WITH(readStl(tempFile("absent.stl")), Catch::Contains("absent.stl") && Catch::Contains("cannot open"));
 }
 
-TEST_CASE("VTK files of particles and meshes hold the positions, connectivity and node forces", "[builtin]") {
+TEST_CASE("VTK files of particles and meshes hold the positions, connectivity, velocities and node forces", "[builtin]") {
   using namespace demfem::builtin::testing;
   DemSimulation sim(makeSoil({}), box(1.0), 1);
   const ParticleState particles[3] = {{{0.1, 0.2, 0.3}, {1, 0, 0}, {0, 0, 0}, 0.005, 0, 0},
@@ -136,26 +105,26 @@ TEST_CASE("VTK files of particles and meshes hold the positions, connectivity an
   }(), 0.01);
   sim.addMesh(tetra);
 
-  const auto pfile = tempFile("particles.vtk");
+  // Read back by VTK's own XML reader (vtkio::read) with the declared arrays and sizes.
+  const auto pfile = tempFile("particles.vtp");
   sim.writeParticlesVtk(pfile);
-  const std::string ptext = slurp(pfile);
-  REQUIRE(ptext.rfind("# vtk DataFile Version", 0) == 0);
-  REQUIRE(vtkCount(ptext, "POINTS") == 3);
-  const auto points = vtkRows(ptext, "POINTS", 3);
+  const auto p = demfem::vtkio::read(pfile);
+  CHECK(p.time_s == sim.time());
+  REQUIRE(p.pointCount() == 3);
   for (int i = 0; i < 3; ++i)
-    for (int c = 0; c < 3; ++c) CHECK(points[i][c] == Approx(particles[i].x[c]).margin(1e-9));
-  const auto velocity = vtkRows(ptext, "VECTORS velocity_m_s", 3);
-  REQUIRE(velocity.size() == 3);
-  CHECK(velocity[2][2] == Approx(3.0));
+    for (int c = 0; c < 3; ++c) CHECK(p.points[3 * i + c] == particles[i].x[c]);
+  CHECK(p.array("velocity_m_s").values[8] == 3.0);
+  CHECK(p.array("radius_m").values == std::vector<double>{0.005, 0.006, 0.007});
+  CHECK(p.array("layer").type == demfem::vtkio::ValueType::Int32);
+  CHECK(p.array("force_N").components == 3);
 
-  const auto mfile = tempFile("mesh.vtk");
+  const auto mfile = tempFile("mesh.vtp");
   sim.writeMeshVtk(0, mfile);
-  const std::string mtext = slurp(mfile);
-  CHECK(vtkCount(mtext, "POINTS") == 4);
-  REQUIRE(vtkCount(mtext, "POLYGONS") == 4);
-  for (const auto& row : vtkRows(mtext, "POLYGONS", 4)) {
-    REQUIRE(row.size() == 4);
-    CHECK(row[0] == 3);
-  }
-  CHECK(vtkRows(mtext, "VECTORS force_N", 4).size() == 4);
+  const auto m = demfem::vtkio::read(mfile);
+  CHECK(m.pointCount() == 4);
+  REQUIRE(m.triangles.size() == 4);
+  for (std::size_t t = 0; t < 4; ++t)
+    for (int k = 0; k < 3; ++k) CHECK(m.triangles[t][k] == tetra.triangles[t][k]);
+  CHECK(m.array("force_N").values.size() == 12);
+  CHECK(m.array("displacement_m").values == std::vector<double>(12, 0.0));
 }

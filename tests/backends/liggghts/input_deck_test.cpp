@@ -98,7 +98,7 @@ TEST_CASE("EDEM-only contact laws and values LIGGGHTS would abort on are refused
   s.soil.interactions.pop_back();  // soil-tool pair missing
   CHECK(errorCodeOf(s) == adapter::ErrorCode::BadRequest);
   s = smallStudy();
-  s.tools[0].geometry.kind = study::GeometryKind::Cone;
+  s.tools[0].geometry.kind = study::GeometryKind::Gmsh;  // its keypoints come from the FEM model
   CHECK(errorCodeOf(s) == adapter::ErrorCode::Unsupported);
 }
 

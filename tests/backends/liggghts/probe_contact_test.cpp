@@ -183,3 +183,31 @@ TEST_CASE("bad calls are refused with the coupling error codes", "[liggghts]") {
   backend->shutdown();  // idempotent
   CHECK(code([&] { backend->time(); }) == adapter::ErrorCode::BadRequest);
 }
+
+TEST_CASE("a cone penetrometer pressed on a single sphere gets the hooke force kn delta", "[liggghts]") {
+  Setup setup;  // its kn(): sphere against the tool steel
+  study::Study& s = setup.study;
+  s.kind = study::StudyKind::ConePenetration;
+  study::Tool& cone = s.tools[0];
+  cone.geometry.kind = study::GeometryKind::Cone;
+  cone.geometry.cone_area_m2 = 5e-4;
+  cone.geometry.cone_angle_rad = std::numbers::pi / 3;
+  cone.geometry.length_m = 0.06;
+  cone.geometry.keypoint_spacing_m = 0.005;
+  cone.motion.stroke_m = 0;
+  cone.motion.start_z_m = 0.08;
+  const Vec3 tip = liggghts::toolStartOrigin(s, 0);
+  liggghts::ProbeSphere probe;
+  probe.centre_m = {tip[0], tip[1] - (kRadius - kOverlap), tip[2]};  // right below the tip, overlapping it
+  probe.radius_m = kRadius;
+  probe.material = "soil";
+  liggghts::BackendOptions options;
+  options.probes = {probe};
+  auto backend = liggghts::makeBackend(s, options);
+  backend->simulate(backend->info().dem_time_step_s);
+  const Vec3 total = sum(backend->nodeForces("tool", adapter::ForceMode::Instantaneous));
+  // The tip vertex pushes the sphere down; the sphere pushes the cone up by kn delta.
+  CHECK(total[1] == Approx(setup.kn() * kOverlap).epsilon(1e-6));
+  CHECK(std::abs(total[0]) < 1e-9);
+  CHECK(std::abs(total[2]) < 1e-9);
+}

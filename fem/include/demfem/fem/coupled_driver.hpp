@@ -29,10 +29,11 @@
 //   keypoints.csv `id,x_m,y_m,z_m` undeformed keypoints (FEM order);
 //   keypoint_displacements.f64  little-endian float64 records [t_s, u (3n, m, FEM keypoint order)],
 //                one per drag-phase step;
-//   vtk/fem-TOOL_NNNNNN.vtk (every vtk_every FEM steps; NNNNNN the FEM step that begins at that
-//                instant) and the collection vtk/fem-TOOL.pvd, timed on the DEM clock: the tool as
+//   vtk/fem-TOOL_NNNNNN.vtu (every vtk_every FEM steps; NNNNNN the FEM step that begins at that
+//                instant; vtkio: binary, compressed, node displacement_m and the node force_N of
+//                that step) and the collection vtk/fem-TOOL.pvd, timed on the DEM clock: the tool as
 //                the DEM simulates it from that instant (the positions just sent), so a DEM
-//                backend's files of the same step (builtin: vtk/dem-TOOL_NNNNNN.vtk) coincide.
+//                backend's files of the same step (builtin: vtk/dem-TOOL_NNNNNN.vtp) coincide.
 //   Every write, sync, close and rename is checked (adapter/output_files.hpp). Streams are
 //   written as NAME.partial and renamed when the run ends. A run that does not do the whole plan —
 //   a failure, an interruption, or max_steps below the plan — is marked incomplete: the CSV gets a

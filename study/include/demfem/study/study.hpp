@@ -17,8 +17,10 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <numbers>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -132,9 +134,12 @@ struct ToolGeometry {
   std::filesystem::path mass_file;     // MatrixMarket: M
   std::filesystem::path stiffness_file;// MatrixMarket: K
   std::filesystem::path keypoint_file; // MatrixMarket: keypoint list (node ids and coordinates)
-  // Cone penetrometer (Fig. 6c): projected area and full apex angle.
+  // Cone penetrometer (Fig. 6c): projected area and full apex angle; length_m is tip to shaft top
+  // (the shaft is a cylinder of the cone's base radius).
   double cone_area_m2 = 5e-4;
   double cone_angle_rad = 1.0471975511965976;
+  double coneRadius_m() const { return std::sqrt(cone_area_m2 / std::numbers::pi); }      // base = shaft radius
+  double coneHeight_m() const { return coneRadius_m() / std::tan(cone_angle_rad / 2); }   // tip to base
   bool operator==(const ToolGeometry&) const = default;
 };
 

@@ -13,13 +13,17 @@
 //   that simulates no particles.
 // - An unsettled soil (a settling stage hit its time cap, or the final kinetic energy is not below
 //   soil.deposition.settle_kinetic_energy_J) is refused by requireSettled() unless allowed.
+// - openSoilBackend(): the DEM backend of a soil study in this process (demfem-dem serves it,
+//   `demfem cpt` pushes its cones).
 #pragma once
 
+#include "demfem/adapter/coupling_api.hpp"
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/cli/backend_registry.hpp"
 #include "demfem/study/study.hpp"
 
 #include <filesystem>
+#include <memory>
 #include <string>
 
 namespace demfem::cli {
@@ -28,5 +32,10 @@ adapter::SettledSoil depositWith(const std::string& backend, const study::Study&
 
 // Throws InputError naming `file` and the reason when the soil is not settled and !allow_unsettled.
 void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::path& file, bool allow_unsettled);
+
+// The soil DEM `backend` (a soil backend of backend_registry.hpp, in this process) on the study's
+// settled soil: a soil file missing is deposited first (by the study's deposition backend; a backend
+// that deposits its own does so while it is built), then checked by requireSettled().
+std::unique_ptr<adapter::CouplingApi> openSoilBackend(const BackendEntry& backend, const study::Study& study, bool allow_unsettled);
 
 }  // namespace demfem::cli

@@ -33,8 +33,8 @@ inline study::BackendCapabilities capabilities() {
 // (BadRequest naming it).
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress = {});
 
-// The DEM mesh of a tool: the plate's keypoint triangulation shared with the FEM
-// (adapter/plate_surface.hpp), local frame, material not yet set. Throws
+// The DEM mesh of a tool: its keypoint surface (adapter/tool_surface.hpp: the plate's triangulation
+// shared with the FEM, or the cone penetrometer), local frame, material not yet set. Throws
 // adapter::CouplingError(Unsupported) for geometries the builtin backend does not mesh.
 TriangleMesh toolMesh(const study::Tool& tool);
 

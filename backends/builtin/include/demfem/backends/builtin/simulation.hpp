@@ -151,10 +151,12 @@ class DemSimulation {
   DemSimulation withState(adapter::PayloadReader& in) const;
   void loadState(adapter::PayloadReader& in);
 
-  // Legacy VTK polydata of the particles (radius, layer, velocity) for ParaView. Written atomically;
-  // throws adapter::OutputError (adapter/output_files.hpp) naming the file.
+  // The particles for ParaView as a .vtp (vtkio: binary, compressed, with the simulated time): radius_m,
+  // velocity_m_s, layer and force_N (the contact force of the last step, gravity excluded). Written
+  // atomically; throws adapter::OutputError (adapter/output_files.hpp) naming the file.
   void writeParticlesVtk(const std::filesystem::path& file) const;
-  // Legacy VTK polydata of mesh m in the bin frame (with node force; positions to 17 digits). Same.
+  // Mesh m in the bin frame as a .vtp: its triangles, node displacement_m (deformation, local axes) and
+  // node force_N (the particles' force of the last step; positions as doubles). Same.
   void writeMeshVtk(int m, const std::filesystem::path& file) const;
 
  private:

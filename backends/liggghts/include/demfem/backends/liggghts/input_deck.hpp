@@ -25,7 +25,7 @@
 //   value would make LIGGGHTS stop the process (LIGGGHTS input errors call exit()).
 #pragma once
 
-#include "demfem/adapter/plate_surface.hpp"
+#include "demfem/adapter/tool_surface.hpp"
 #include "demfem/study/study.hpp"
 
 #include <array>
@@ -57,10 +57,10 @@ int atomType(const study::Study& study, const std::string& material);
 std::array<double, 3> toolStartOrigin(const study::Study& study, std::size_t tool_index);
 
 // The keypoint surface of tool i (plate tools only; other geometry kinds throw Unsupported).
-adapter::PlateSurface toolSurface(const study::Study& study, std::size_t tool_index);
+adapter::ToolSurface toolSurface(const study::Study& study, std::size_t tool_index);
 
 // Writes `surface` as an ASCII STL, every node translated by `origin` (bin frame, metres).
-void writeToolStl(const adapter::PlateSurface& surface, const std::array<double, 3>& origin,
+void writeToolStl(const adapter::ToolSurface& surface, const std::array<double, 3>& origin,
                   const std::filesystem::path& file);
 
 // Translates `study` (validated by study::loadStudy) into LIGGGHTS commands; tool STL files are

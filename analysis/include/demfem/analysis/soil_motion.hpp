@@ -1,0 +1,120 @@
+// demfem analysis: the motion a tool causes in the soil (paper Section 3.5, Fig. 16; docs/analysis.md,
+// "Soil motion"), computed from the particle files of a run (vtkio: vtk/particles.pvd and the DEM
+// tool surfaces vtk/dem-TOOL.pvd). Nothing here knows the simulation: measured particle tracks in the
+// same files would be analysed alike.
+//
+// Contract
+// - Units SI, bin frame (docs/architecture.md section 10): x across, y up, z along the bin (travel +z).
+// - ParticleFrame: one instant; positions, velocities n x 3, radii, layer labels (0 = top).
+// - velocitySection(): the particles whose centre lies within half_thickness of the plane (x = position
+//   for Axis::X, the vertical section along the travel; y = position for Axis::Y, a horizontal
+//   section) binned into square cells of `cell` from the lowest centre of the frame on each map axis
+//   (cell k holds [lowest + k cell, lowest + (k + 1) cell));
+//   each cell holds the mean speed |v| of its particles (NaN where a cell has none). Map axes: (z, y)
+//   for Axis::X, (z, x) for Axis::Y.
+// - movingExtent(): the region of the particles faster than `threshold` (|v| > threshold), as the
+//   union of their spheres: depth below `surface_y` of its lowest point, its length along z and its
+//   width along x (the paper's 83 mm against 55-58 mm is this depth). No fast particle: count 0 and
+//   zero sizes.
+// - frontVelocityRange(): speeds of the particles whose centre lies in `box` (in front of the tool:
+//   across its width, from its tip to the surface, within reach of its front face). No particle:
+//   count 0.
+// - layerBoundaries(): heights between vertically adjacent layers of a frame (midway between the
+//   lowest centre of the upper layer and the highest centre of the lower one), top layer first.
+// - mixingIndex(): H(layer | cell) / H(layer), the Shannon entropy of the layer labels within a cell,
+//   weighted by the cell's particles, over the entropy of all labels; cells are columns of `cell` in
+//   x and z cut at the given boundary heights. 0 when every cell holds one layer (untouched layers,
+//   cut at their boundaries), 1 when every cell holds the labels in the proportions of the whole (a
+//   random permutation tends to it). A frame with a single label: 0. mixingSection() maps the same
+//   normalised entropy per (z, y) cell (the layer-mixing map).
+// - loadRun(): the frames listed by DIR/vtk/particles.pvd and the tool surfaces by DIR/vtk/dem-TOOL.pvd
+//   (the only DEM tool collection when `tool` is empty), matched by time (within 1e-9 s);
+//   readParticleFrame() one particle file. Both throw InputError naming the file (missing collection,
+//   arrays velocity_m_s / radius_m / layer missing or of another size, more than one tool and none
+//   chosen, a particle time without a tool file).
+// - toolDisplacement(): the mean z of the tool's nodes at a frame minus at the first frame (the
+//   insertion does not move it in z).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace demfem::analysis {
+
+struct ParticleFrame {
+  double time_s = 0;
+  std::vector<double> position_m;   // n x 3
+  std::vector<double> velocity_m_s; // n x 3
+  std::vector<double> radius_m;
+  std::vector<int> layer;
+  std::size_t size() const { return radius_m.size(); }
+  double speed(std::size_t i) const;
+};
+
+struct Box {
+  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+  bool contains(const double* p) const;
+};
+
+enum class Axis { X, Y };
+
+// A section binned into square cells: mean speed (m/s) of velocitySection(), normalised layer
+// entropy of mixingSection().
+struct SectionMap {
+  Axis axis = Axis::X;
+  double position_m = 0, half_thickness_m = 0, cell_m = 0;
+  double u0_m = 0, v0_m = 0;      // lower corner of the map (z, then y or x)
+  int nu = 0, nv = 0;             // cells along the map's u (z) and v axes
+  std::vector<double> values;     // nu x nv, u fastest; NaN = empty cell
+  double at(int iu, int iv) const { return values[static_cast<std::size_t>(iv) * nu + iu]; }
+};
+
+SectionMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m);
+
+struct MovingExtent {
+  double threshold_m_s = 0;
+  std::size_t count = 0;
+  double depth_m = 0, length_m = 0, width_m = 0;
+  Box region;                     // the union's bounding box
+};
+
+MovingExtent movingExtent(const ParticleFrame& frame, double threshold_m_s, double surface_y_m);
+
+struct SpeedRange {
+  std::size_t count = 0;
+  double min_m_s = 0, median_m_s = 0, max_m_s = 0;
+};
+
+SpeedRange frontVelocityRange(const ParticleFrame& frame, const Box& box);
+
+std::vector<double> layerBoundaries(const ParticleFrame& frame);
+
+double mixingIndex(const ParticleFrame& frame, double cell_m, const std::vector<double>& boundaries_y_m);
+
+// The layer mixing along the bin: cells of `cell` in z and y over the whole width, each holding the
+// entropy of its particles' labels over the entropy of all labels (0 one layer, 1 fully mixed).
+SectionMap mixingSection(const ParticleFrame& frame, double cell_m);
+
+struct ToolFrame {
+  double time_s = 0;
+  std::vector<double> node_m;  // n x 3, bin frame
+  Box bounds() const;
+};
+
+// A run's particle files (read one at a time: a frame of the paper's bin is about 1 MB) and its tool.
+struct RunFrames {
+  std::filesystem::path directory;
+  std::string tool;
+  std::vector<double> time_s;
+  std::vector<std::filesystem::path> particle_files;
+  std::vector<ToolFrame> tool_frames;  // one per particle file, at its time
+};
+
+RunFrames loadRun(const std::filesystem::path& run_dir, const std::string& tool = "");
+ParticleFrame readParticleFrame(const std::filesystem::path& file);
+
+double toolDisplacement(const RunFrames& run, std::size_t frame);
+
+}  // namespace demfem::analysis

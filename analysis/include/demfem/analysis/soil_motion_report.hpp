@@ -1,0 +1,71 @@
+// demfem analysis: the soil-motion report of one or more runs side by side (paper Section 3.5,
+// Fig. 16; docs/analysis.md, "Soil motion"), from the measures of soil_motion.hpp.
+//
+// Contract
+// - analyseRun(): for every requested tool displacement, the particle frame whose toolDisplacement()
+//   is nearest (InputError when the run's displacements miss it by more than half the largest step
+//   between consecutive frames, or the run has fewer than two frames): the vertical section through the tool's centre
+//   (x = mid of its bounds), one horizontal section at half the tool's tip depth, the moving extent
+//   above `threshold_m_s`, the speed range in front of the tool (across its width, from its tip up to
+//   the surface, from its front face to `front_reach_m` ahead) and the mixing index; the mixing of the
+//   first frame (before) and of the last (after the tool passed). The surface is the highest particle
+//   top (y + radius) of the first frame; layer boundaries are layerBoundaries() of the first frame.
+// - soilMotionJson(): {"threshold_mm_s", "cell_mm", "runs": [{"run", "tool", "surface_mm",
+//   "mixing_before", "mixing_after", "instants": [{"displacement_mm", "t_s", "moving_depth_mm",
+//   "moving_length_mm", "moving_width_mm", "moving_particles", "front_speed_min_mm_s",
+//   "front_speed_median_mm_s", "front_speed_max_mm_s", "front_particles", "mixing"}]}]}.
+// - writeSoilMotionOutputs() stages soil-motion.json, soil-motion.md (the Markdown section) and, with
+//   a renderer, plots/velocity-sections.{svg,png} (vertical sections, one column per run, one row per
+//   displacement, the moving region's and the tool's outlines), plots/horizontal-sections.{svg,png}
+//   and plots/mixing.{svg,png} (layer-mixing maps before and after), each with its .gp scripts.
+#pragma once
+
+#include "demfem/analysis/plot.hpp"
+#include "demfem/analysis/soil_motion.hpp"
+#include "demfem/analysis/staged_output.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace demfem::analysis {
+
+struct SoilMotionSettings {
+  std::vector<double> displacements_m;  // tool displacements to look at
+  double threshold_m_s = 0.005;         // "in motion"
+  double cell_m = 0.01;                 // map cells (one particle diameter of the paper's soil)
+  double half_thickness_m = 0.005;      // sections: centres within this of the plane
+  double front_reach_m = 0.0105;        // ahead of the front face (one largest diameter)
+  double mixing_cell_m = 0.02;
+  std::string tool;                     // empty: the run's only tool
+};
+
+struct SoilMotionInstant {
+  double displacement_m = 0, time_s = 0;
+  Box tool;
+  SectionMap vertical, horizontal;
+  MovingExtent extent;
+  SpeedRange front;
+  double mixing = 0;
+};
+
+struct SoilMotionRun {
+  std::string name, tool;
+  double surface_y_m = 0;
+  std::vector<double> boundaries_y_m;
+  double mixing_before = 0, mixing_after = 0;
+  SectionMap mixing_map_before, mixing_map_after;
+  std::vector<SoilMotionInstant> instants;
+};
+
+SoilMotionRun analyseRun(const std::filesystem::path& run_dir, const SoilMotionSettings& settings);
+
+nlohmann::json soilMotionJson(const std::vector<SoilMotionRun>& runs, const SoilMotionSettings& settings);
+std::string soilMotionMarkdown(const std::vector<SoilMotionRun>& runs, const SoilMotionSettings& settings);
+
+void writeSoilMotionOutputs(StagedOutput& out, const std::vector<SoilMotionRun>& runs, const SoilMotionSettings& settings,
+                            const GnuplotRenderer* renderer);
+
+}  // namespace demfem::analysis
