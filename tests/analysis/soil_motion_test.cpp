@@ -1,6 +1,7 @@
 // Soil-motion measures on synthetic particle fields whose answers are known exactly.
 #include "demfem/analysis/recording.hpp"
 #include "demfem/analysis/soil_motion.hpp"
+#include "demfem/analysis/soil_motion_report.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -218,4 +219,25 @@ TEST_CASE("flow sections and streamlines refuse an empty frame, a cell <= 0 and 
   StreamlineRules no_turn;
   no_turn.max_step_turn_rad = 0;
   CHECK_THROWS_WITH(traceStreamlines(flow, no_turn), Catch::Contains("turning limits"));
+}
+
+TEST_CASE("the soil-motion JSON reports a still section's streamline order and lengths as null, not zero", "[analysis]") {
+  SoilMotionRun still;
+  still.name = "still";
+  SoilMotionInstant in;
+  in.flow = latticeFlow(6, 20, [](double, double) { return std::pair{0.003, 0.0}; });
+  in.order = alignmentOrder(in.flow);
+  in.streamlines = traceStreamlines(in.flow, StreamlineRules{});
+  in.streamline_statistics = streamlineStatistics(in.streamlines);
+  still.instants.push_back(in);
+  const SoilMotionSettings settings;
+  const auto doc = soilMotionJson({still}, settings);
+  const auto& j = doc["runs"][0]["instants"][0];
+  CHECK(j["streamlines"] == 0);
+  CHECK(j["streamline_order_cells"] == 0);
+  for (const char* key : {"streamline_order", "streamline_order_random_baseline", "mean_streamline_length_mm", "median_streamline_length_mm",
+                          "streamline_curvature_rad_per_mm"})
+    CHECK(j[key].is_null());
+  CHECK(doc["streamline_step_mm"].get<double>() == Approx(5.0));
+  CHECK(soilMotionMarkdown({still}, settings).find("none (nothing in motion)") != std::string::npos);
 }
