@@ -4,8 +4,11 @@
 #include "demfem/vtkio/vtk_files.hpp"
 #include "soil_motion_median.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <map>
 
@@ -75,6 +78,22 @@ fs::path toolCollection(const fs::path& vtk_dir, std::string& tool) {
   }
   tool = found.front();
   return vtk_dir / ("dem-" + tool + ".pvd");
+}
+
+// A run marked incomplete by its sidecar (DIR/sensors.json, "complete": false) is refused: its
+// particle files stop where the run failed. No sidecar (particle tracks from elsewhere): nothing to check.
+void refuseIncompleteRun(const fs::path& run_dir) {
+  const fs::path sidecar = run_dir / "sensors.json";
+  if (!fs::exists(sidecar)) return;
+  std::ifstream in(sidecar);
+  const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) throw InputError(sidecar.string() + ": not a JSON object");
+  if (!doc.contains("complete") || !doc["complete"].is_boolean()) throw InputError(sidecar.string() + ": /complete: missing or not true/false");
+  if (!doc["complete"].get<bool>())
+    throw InputError(sidecar.string() + ": /complete: the run is marked incomplete (complete: false" +
+                     (doc.contains("incomplete_reason") && doc["incomplete_reason"].is_string() ? ", " + doc["incomplete_reason"].get<std::string>()
+                                                                                               : std::string()) +
+                     "): its particle files stop where it failed");
 }
 
 }  // namespace
@@ -326,6 +345,7 @@ RunFrames loadRun(const fs::path& run_dir, const std::string& tool) {
   RunFrames run;
   run.directory = run_dir;
   run.tool = tool;
+  refuseIncompleteRun(run_dir);
   const fs::path vtk_dir = run_dir / "vtk";
   const auto particles = collection(vtk_dir / "particles.pvd");
   const auto tools = collection(toolCollection(vtk_dir, run.tool));

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 using namespace demfem::analysis;
@@ -240,4 +242,14 @@ TEST_CASE("the soil-motion JSON reports a still section's streamline order and l
     CHECK(j[key].is_null());
   CHECK(doc["streamline_step_mm"].get<double>() == Approx(5.0));
   CHECK(soilMotionMarkdown({still}, settings).find("none (nothing in motion)") != std::string::npos);
+}
+
+TEST_CASE("a run marked incomplete by its sensors.json is refused naming the file", "[analysis]") {
+  const auto dir = std::filesystem::temp_directory_path() / "demfem-soil-motion-incomplete";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "sensors.json") << R"({"complete": false, "incomplete_reason": "DEM blew up"})";
+  CHECK_THROWS_WITH(loadRun(dir), Catch::Contains("sensors.json: /complete: the run is marked incomplete") && Catch::Contains("DEM blew up"));
+  std::ofstream(dir / "sensors.json") << R"({"complete": true})";
+  CHECK_THROWS_WITH(loadRun(dir), Catch::Contains("particles.pvd"));  // complete: on to the particle files, absent here
+  std::filesystem::remove_all(dir);
 }

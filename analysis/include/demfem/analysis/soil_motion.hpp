@@ -53,7 +53,9 @@
 //   (the only DEM tool collection when `tool` is empty), matched by time (within 1e-9 s);
 //   readParticleFrame() one particle file. Both throw InputError naming the file (missing collection,
 //   arrays velocity_m_s / radius_m / layer missing or of another size, more than one tool and none
-//   chosen, a particle time without a tool file).
+//   chosen, a particle time without a tool file). A run whose DIR/sensors.json exists and says
+//   "complete": false (a failed simulation) is refused naming that file; without a sidecar (tracks
+//   measured elsewhere) there is nothing to check.
 // - toolDisplacement(): the mean z of the tool's nodes at a frame minus at the first frame (the
 //   insertion does not move it in z).
 #pragma once
