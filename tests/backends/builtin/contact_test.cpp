@@ -366,7 +366,7 @@ TEST_CASE("a wall overlap blow-up names the tool surface and the coupling step",
   mesh.name = "PMMA";
   mesh.material = 1;
   sim.addMesh(mesh);
-  // 50 m/s into the face: far more than the wall spring stops within 0.25 R.
+  // 50 m/s into the face: far more than the wall spring stops within the overlap limit.
   sim.addParticle({{0.0021, 1.05 * kR, 0.0063}, {0, -50, 0}, {0, 0, 0}, kR, 0, 0});
   sim.setTimeStep(1e-6);
   try {

@@ -109,7 +109,7 @@ class DemSimulation {
   // 2 sqrt(m*/k_max) over the particles and walls in it: the largest step setTimeStep accepts (the
   // study's step is chosen by physics::demTimeStep, backends/physics/time_step.hpp).
   double stabilityLimit() const;
-  static constexpr double overlapLimitFraction() { return 0.25; }
+  static constexpr double overlapLimitFraction() { return 0.5; }
 
   // --- meshes ---
   int meshCount() const { return static_cast<int>(meshes_.size()); }
