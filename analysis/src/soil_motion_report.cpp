@@ -85,6 +85,8 @@ std::vector<double> millimetres(const std::vector<double>& metres) {
 json jsonMm(double metres) { return std::isfinite(metres) ? json(metres * 1e3) : json(nullptr); }
 json jsonValue(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
+double degrees(double radians) { return radians * 180 / M_PI; }
+
 std::string mm(double metres) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(1) << metres * 1e3;
@@ -136,6 +138,34 @@ Figure mixingFigure(const std::vector<SoilMotionRun>& runs) {
   return f;
 }
 
+// The streamline-order part of the Markdown section: the rules, then one row per run and instant.
+void streamlineTable(std::ostream& md, const std::vector<SoilMotionRun>& runs, const SoilMotionSettings& s) {
+  md << "\nStreamline order on the vertical section through the tool (Fig. 16c: organised, long streamlines against short, "
+        "irregular ones), in cells of "
+     << mm(s.flow_cell_m) << " mm: alignment = length of the mean unit velocity vector of the moving particles of a cell, weighted by "
+        "them (1 organised; independent random directions give about 1/sqrt(n), the baseline); streamlines through every cell in motion "
+        "(RK2, steps of "
+     << mm(s.streamlines.step_fraction * s.flow_cell_m) << " mm, ended on leaving the region, below the threshold, at a turn above "
+     << degrees(s.streamlines.max_step_turn_rad) << " degrees per step or after " << degrees(s.streamlines.max_total_turn_rad)
+     << " degrees in all).\n\n"
+        "| run | displacement (mm) | alignment order (random baseline, cells) | streamlines | mean length (mm) | median length (mm) | "
+        "curvature (rad/mm) |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& r : runs)
+    for (const auto& in : r.instants) {
+      const auto& st = in.streamline_statistics;
+      md << "| " << r.name << " | " << mm(in.displacement_m) << " | ";
+      if (in.order.cells)
+        md << std::setprecision(3) << in.order.order << " (" << in.order.random_baseline << ", " << in.order.cells << ")";
+      else
+        md << "none (no cell with 2 moving particles)";
+      if (st.count)
+        md << " | " << st.count << " | " << mm(st.mean_length_m) << " | " << mm(st.median_length_m) << " | " << std::setprecision(3)
+           << st.curvature_rad_per_m * 1e-3 << " |\n";
+      else
+        md << " | none (nothing in motion) | | | |\n";
+    }
+}
+
 }  // namespace
 
 SoilMotionRun analyseRun(const std::filesystem::path& run_dir, const SoilMotionSettings& s) {
@@ -162,8 +192,8 @@ SoilMotionRun analyseRun(const std::filesystem::path& run_dir, const SoilMotionS
 json soilMotionJson(const std::vector<SoilMotionRun>& runs, const SoilMotionSettings& s) {
   json out{{"threshold_mm_s", s.threshold_m_s * 1e3}, {"cell_mm", s.cell_m * 1e3}, {"mixing_cell_mm", s.mixing_cell_m * 1e3},
            {"flow_cell_mm", s.flow_cell_m * 1e3}, {"streamline_step_mm", s.streamlines.step_fraction * s.flow_cell_m * 1e3},
-           {"streamline_max_step_turn_deg", s.streamlines.max_step_turn_rad * 180 / M_PI},
-           {"streamline_max_total_turn_deg", s.streamlines.max_total_turn_rad * 180 / M_PI}, {"runs", json::array()}};
+           {"streamline_max_step_turn_deg", degrees(s.streamlines.max_step_turn_rad)},
+           {"streamline_max_total_turn_deg", degrees(s.streamlines.max_total_turn_rad)}, {"runs", json::array()}};
   for (const auto& r : runs) {
     json run{{"run", r.name}, {"tool", r.tool}, {"surface_mm", r.surface_y_m * 1e3}, {"mixing_before", r.mixing_before},
              {"mixing_after", r.mixing_after}, {"instants", json::array()}};
@@ -208,30 +238,7 @@ std::string soilMotionMarkdown(const std::vector<SoilMotionRun>& runs, const Soi
          << ", " << in.front.count << " particles) | " << std::setprecision(3) << in.mixing << " |\n";
     md << "| " << r.name << " | after (last frame) | | | | | " << std::setprecision(3) << r.mixing_after << " |\n";
   }
-  md << "\nStreamline order on the vertical section through the tool (Fig. 16c: organised, long streamlines against short, "
-        "irregular ones), in cells of "
-     << mm(s.flow_cell_m) << " mm: alignment = length of the mean unit velocity vector of the moving particles of a cell, weighted by "
-        "them (1 organised; independent random directions give about 1/sqrt(n), the baseline); streamlines through every cell in motion "
-        "(RK2, steps of "
-     << mm(s.streamlines.step_fraction * s.flow_cell_m) << " mm, ended on leaving the region, below the threshold, at a turn above "
-     << s.streamlines.max_step_turn_rad * 180 / M_PI << " degrees per step or after " << s.streamlines.max_total_turn_rad * 180 / M_PI
-     << " degrees in all).\n\n"
-        "| run | displacement (mm) | alignment order (random baseline, cells) | streamlines | mean length (mm) | median length (mm) | "
-        "curvature (rad/mm) |\n|---|---|---|---|---|---|---|\n";
-  for (const auto& r : runs)
-    for (const auto& in : r.instants) {
-      const auto& st = in.streamline_statistics;
-      md << "| " << r.name << " | " << mm(in.displacement_m) << " | ";
-      if (in.order.cells)
-        md << std::setprecision(3) << in.order.order << " (" << in.order.random_baseline << ", " << in.order.cells << ")";
-      else
-        md << "none (no cell with 2 moving particles)";
-      if (st.count)
-        md << " | " << st.count << " | " << mm(st.mean_length_m) << " | " << mm(st.median_length_m) << " | " << std::setprecision(3)
-           << st.curvature_rad_per_m * 1e-3 << " |\n";
-      else
-        md << " | none (nothing in motion) | | | |\n";
-    }
+  streamlineTable(md, runs, s);
   md << "\n![vertical sections](plots/velocity-sections.svg)\n\n![horizontal sections](plots/horizontal-sections.svg)\n\n"
         "![layer mixing](plots/mixing.svg)\n";
   return md.str();

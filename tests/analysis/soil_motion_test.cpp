@@ -2,12 +2,12 @@
 #include "demfem/analysis/recording.hpp"
 #include "demfem/analysis/soil_motion.hpp"
 #include "demfem/analysis/soil_motion_report.hpp"
+#include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <random>
 
@@ -245,11 +245,9 @@ TEST_CASE("the soil-motion JSON reports a still section's streamline order and l
 }
 
 TEST_CASE("a run marked incomplete by its sensors.json is refused naming the file", "[analysis]") {
-  const auto dir = std::filesystem::temp_directory_path() / "demfem-soil-motion-incomplete";
-  std::filesystem::create_directories(dir);
+  const demfem::support::TempDir dir("soil-motion-incomplete");
   std::ofstream(dir / "sensors.json") << R"({"complete": false, "incomplete_reason": "DEM blew up"})";
-  CHECK_THROWS_WITH(loadRun(dir), Catch::Contains("sensors.json: /complete: the run is marked incomplete") && Catch::Contains("DEM blew up"));
+  CHECK_THROWS_WITH(loadRun(dir.path()), Catch::Contains("sensors.json: /complete: the run is marked incomplete") && Catch::Contains("DEM blew up"));
   std::ofstream(dir / "sensors.json") << R"({"complete": true})";
-  CHECK_THROWS_WITH(loadRun(dir), Catch::Contains("particles.pvd"));  // complete: on to the particle files, absent here
-  std::filesystem::remove_all(dir);
+  CHECK_THROWS_WITH(loadRun(dir.path()), Catch::Contains("particles.pvd"));  // complete: on to the particle files, absent here
 }
