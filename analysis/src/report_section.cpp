@@ -1,6 +1,5 @@
 #include "report_section.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -50,17 +49,9 @@ std::string csvText(const CellValue& value) { return std::visit(CsvText{}, value
 
 nlohmann::json jsonOf(const CellValue& value) { return std::visit(JsonValue{}, value); }
 
-nlohmann::json RowValues::json(const std::vector<std::string>& except) const {
+nlohmann::json RowValues::json() const {
   nlohmann::json j = nlohmann::json::object();
-  for (const auto& [n, v] : cells_)
-    if (std::find(except.begin(), except.end(), n) == except.end()) j[n] = jsonOf(v);
-  return j;
-}
-
-nlohmann::json RowValues::jsonEndingWith(const std::string& suffix) const {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [n, v] : cells_)
-    if (n.size() >= suffix.size() && n.compare(n.size() - suffix.size(), suffix.size(), suffix) == 0) j[n] = jsonOf(v);
+  for (const auto& [n, v] : cells_) j[n] = jsonOf(v);
   return j;
 }
 

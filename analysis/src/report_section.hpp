@@ -2,8 +2,9 @@
 // each table is declared once, as columns (the name, with the unit in it, and the getter of the
 // value for a row). The CSV table is generated from the columns, and so is the Markdown table: its
 // cells are formed from the columns' values, looked up by column name (md::number, md::plusMinus,
-// ...), never read from the results a second time; the JSON documents take their numbers of the
-// same quantities as objects of the columns (RowValues::json).
+// ...), never read from the results a second time; and so is the JSON: one object per row, keyed
+// by column name (Section::json). A column may be marked JSON-only: a quantity the JSON document
+// carries that the CSV table leaves out.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -42,19 +43,21 @@ class RowValues {
   // The value as a number: absent -> NaN, a count as it is; throws std::logic_error for text or a flag.
   double number(const std::string& name) const;
   bool flag(const std::string& name) const;
-  // A JSON object of the columns whose names are not in `except`, keyed by column name.
-  nlohmann::json json(const std::vector<std::string>& except) const;
-  // A JSON object of the columns whose names end with `suffix`, keyed by column name.
-  nlohmann::json jsonEndingWith(const std::string& suffix) const;
+  // A JSON object of every column, keyed by column name (jsonOf() of each value).
+  nlohmann::json json() const;
 
  private:
   std::vector<std::pair<std::string, CellValue>> cells_;
 };
 
+// Where a column appears: the CSV table and the JSON document, or the JSON document only.
+enum class Output { CsvAndJson, JsonOnly };
+
 template <class Row>
 struct Column {
-  std::string name;  // CSV header (the unit in the name: force_mean_N)
+  std::string name;  // CSV header and JSON key (the unit in the name: force_mean_N)
   std::function<CellValue(const Row&)> value;
+  Output output = Output::CsvAndJson;
 };
 
 // A Markdown table cell formed from a row's values.
@@ -80,7 +83,8 @@ std::string markdownTable(const std::vector<std::string>& header, const std::vec
 std::string csvTable(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows);
 
 // One table of a report: its columns, the case title of a row (the Markdown table's first column,
-// "case") and the Markdown table's other columns.
+// "case") and the Markdown table's other columns. A section without Markdown columns is only
+// written as JSON.
 template <class Row>
 struct Section {
   std::vector<Column<Row>> columns;
@@ -95,13 +99,22 @@ struct Section {
 
   std::string csv(const std::vector<Row>& rows) const {
     std::vector<std::string> header;
-    for (const Column<Row>& c : columns) header.push_back(c.name);
+    for (const Column<Row>& c : columns)
+      if (c.output == Output::CsvAndJson) header.push_back(c.name);
     std::vector<std::vector<std::string>> cells;
     for (const Row& row : rows) {
       std::vector<std::string>& line = cells.emplace_back();
-      for (const Column<Row>& c : columns) line.push_back(csvText(c.value(row)));
+      for (const Column<Row>& c : columns)
+        if (c.output == Output::CsvAndJson) line.push_back(csvText(c.value(row)));
     }
     return csvTable(header, cells);
+  }
+
+  // A JSON array of one object per row (RowValues::json), JSON-only columns included.
+  nlohmann::json json(const std::vector<Row>& rows) const {
+    nlohmann::json array = nlohmann::json::array();
+    for (const Row& row : rows) array.push_back(values(row).json());
+    return array;
   }
 
   std::string markdownOf(const std::vector<Row>& rows) const {

@@ -2,6 +2,8 @@
 #include "report_sections.hpp"
 
 #include <array>
+#include <optional>
+#include <utility>
 #include <vector>
 
 namespace demfem::analysis::detail {
@@ -31,6 +33,25 @@ MarkdownCell measuredSlashSimulated(const std::array<std::string, 5>& names) {
   return md::concat({md::plusMinus(names[0], names[1]), md::literal(" / "), md::plusMinus(names[2], names[3])});
 }
 
+// A Section 2.3 landmark of a raw run; absent for a calibrated run taken as it is.
+std::optional<double> landmark(const EvaluatedRun& r, double value) {
+  return r.section_2_3_applied ? std::optional<double>(value) : std::nullopt;
+}
+
+// A statistic of the window's tip tilt; absent when the recording has no tilt.
+std::optional<double> tilt(const EvaluatedRun& r, double SignalStatistics::*statistic) {
+  return r.window.tilt_deg ? std::optional<double>((*r.window.tilt_deg).*statistic) : std::nullopt;
+}
+
+// The number of cycles (or decrements) behind a pooled statistic.
+CellValue cycles(const SignalStatistics& s) { return static_cast<long long>(s.samples); }
+
+// The two signals of a calibration-weight record, in the order of the runs' tables.
+template <class Summary>
+std::array<std::pair<std::string, const Summary*>, 2> bothSignals(const Summary& force, const Summary& deformation) {
+  return {{{"force_N", &force}, {"deformation_mm", &deformation}}};
+}
+
 }  // namespace
 
 // --- evaluation sections: soil-bin runs and cases, calibration-weight runs ---
@@ -50,7 +71,12 @@ const Section<EvaluatedRun>& soilBinRunsSection() {
        {"force_mean_N", [](const R& r) -> CellValue { return r.window.force_N.mean; }},
        {"force_std_N", [](const R& r) -> CellValue { return r.window.force_N.std_dev; }},
        {"deformation_mean_mm", [](const R& r) -> CellValue { return r.window.deformation_mm.mean; }},
-       {"deformation_std_mm", [](const R& r) -> CellValue { return r.window.deformation_mm.std_dev; }}},
+       {"deformation_std_mm", [](const R& r) -> CellValue { return r.window.deformation_mm.std_dev; }},
+       {"window_samples", [](const R& r) -> CellValue { return static_cast<long long>(r.window.force_N.samples); }, Output::JsonOnly},
+       {"initial_deformation_mm", [](const R& r) -> CellValue { return landmark(r, r.initial_deformation_mm); }, Output::JsonOnly},
+       {"max_deformation_mm", [](const R& r) -> CellValue { return landmark(r, r.max_deformation_mm); }, Output::JsonOnly},
+       {"tilt_mean_deg", [](const R& r) -> CellValue { return tilt(r, &SignalStatistics::mean); }, Output::JsonOnly},
+       {"tilt_std_deg", [](const R& r) -> CellValue { return tilt(r, &SignalStatistics::std_dev); }, Output::JsonOnly}},
       [](const R& r) { return r.key.title(); },
       {{"repeat", md::text("repeat")},
        {"start (s)", md::onlyIf("section_2_3_applied", md::number("start_time_s"))},
@@ -104,6 +130,7 @@ const Section<ResponseRow>& calibrationRunsSection() {
        {"decrements", [](const R& r) -> CellValue { return static_cast<long long>(r.response->cycle_damping_ratios.size()); }},
        {"residual_rms", [](const R& r) -> CellValue { return r.response->fit.residual_rms; }},
        {"step_time_s", [](const R& r) -> CellValue { return r.response->fit.step_time_s; }},
+       {"initial_value", [](const R& r) -> CellValue { return r.response->fit.initial; }, Output::JsonOnly},
        {"first_peak_time_s", [](const R& r) -> CellValue { return r.response->first_peak_time_s; }}},
       [](const R& r) { return r.run->key.title(); },
       {{"repeat", md::text("repeat")},
@@ -133,7 +160,15 @@ const Section<const SoilBinComparison*>& meansSection() {
        {"measured_deformation_std_mm", [](R c) -> CellValue { return c->measured.deformation_std_mm; }},
        {"simulated_deformation_mean_mm", [](R c) -> CellValue { return c->simulated.deformation_mean_mm; }},
        {"simulated_deformation_std_mm", [](R c) -> CellValue { return c->simulated.deformation_std_mm; }},
-       {"deformation_difference_percent", [](R c) -> CellValue { return c->deformation_difference_percent; }}},
+       {"deformation_difference_percent", [](R c) -> CellValue { return c->deformation_difference_percent; }},
+       {"measured_repeats", [](R c) -> CellValue { return static_cast<long long>(c->measured.repeats.size()); }, Output::JsonOnly},
+       {"simulated_repeats", [](R c) -> CellValue { return static_cast<long long>(c->simulated.repeats.size()); }, Output::JsonOnly},
+       {"measured_force_between_repeats_std_N", [](R c) -> CellValue { return c->measured.force_between_repeats_std_N; }, Output::JsonOnly},
+       {"simulated_force_between_repeats_std_N", [](R c) -> CellValue { return c->simulated.force_between_repeats_std_N; }, Output::JsonOnly},
+       {"measured_deformation_between_repeats_std_mm",
+        [](R c) -> CellValue { return c->measured.deformation_between_repeats_std_mm; }, Output::JsonOnly},
+       {"simulated_deformation_between_repeats_std_mm",
+        [](R c) -> CellValue { return c->simulated.deformation_between_repeats_std_mm; }, Output::JsonOnly}},
       [](R c) { return c->key.title(); },
       {{"measured force (N)", md::plusMinus("measured_force_mean_N", "measured_force_std_N")},
        {"simulated force (N)", md::plusMinus("simulated_force_mean_N", "simulated_force_std_N")},
@@ -159,7 +194,15 @@ const Section<SpectrumRow>& spectraSection() {
        {"simulated_b", [](const R& r) -> CellValue { return r.s->simulated_fit.b; }},
        {"simulated_b_std_error", [](const R& r) -> CellValue { return r.s->simulated_fit.b_std_error; }},
        {"amplitude_ratio_at_1Hz", [](const R& r) -> CellValue { return r.s->amplitude_ratio_at_1Hz; }},
-       {"mean_fitted_amplitude_ratio", [](const R& r) -> CellValue { return r.s->mean_fitted_ratio; }}},
+       {"mean_fitted_amplitude_ratio", [](const R& r) -> CellValue { return r.s->mean_fitted_ratio; }},
+       {"tool", [](const R& r) -> CellValue { return r.c->key.tool; }, Output::JsonOnly},
+       {"depth_mm", [](const R& r) -> CellValue { return r.c->key.depth_mm; }, Output::JsonOnly},
+       {"measured_log10_a_std_error", [](const R& r) -> CellValue { return r.s->measured_fit.log10_a_std_error; }, Output::JsonOnly},
+       {"measured_r_squared_log", [](const R& r) -> CellValue { return r.s->measured_fit.r_squared_log; }, Output::JsonOnly},
+       {"measured_points", [](const R& r) -> CellValue { return static_cast<long long>(r.s->measured_fit.points); }, Output::JsonOnly},
+       {"simulated_log10_a_std_error", [](const R& r) -> CellValue { return r.s->simulated_fit.log10_a_std_error; }, Output::JsonOnly},
+       {"simulated_r_squared_log", [](const R& r) -> CellValue { return r.s->simulated_fit.r_squared_log; }, Output::JsonOnly},
+       {"simulated_points", [](const R& r) -> CellValue { return static_cast<long long>(r.s->simulated_fit.points); }, Output::JsonOnly}},
       [](const R& r) { return r.c->key.title(); },
       {{"signal", md::text("signal")},
        {"band (Hz)", md::concat({md::number("f_low_Hz", 3), md::literal("-"), md::number("f_high_Hz", 3)})},
@@ -187,6 +230,12 @@ const Section<CalibrationRow>& calibrationSection() {
     addStatistic(c, frequency, &ResponseSummary::frequency_Hz);
     addStatistic(c, damping, &ResponseSummary::damping_ratio);
     c.push_back({"correlation_mean", [](const R& r) -> CellValue { return r.correlation; }});
+    c.push_back({"tool", [](const R& r) -> CellValue { return r.c->key.tool; }, Output::JsonOnly});
+    c.push_back({"mass_kg", [](const R& r) -> CellValue { return r.c->key.mass_kg; }, Output::JsonOnly});
+    c.push_back({"measured_frequency_cycles", [](const R& r) -> CellValue { return cycles(r.measured->frequency_Hz); }, Output::JsonOnly});
+    c.push_back({"simulated_frequency_cycles", [](const R& r) -> CellValue { return cycles(r.simulated->frequency_Hz); }, Output::JsonOnly});
+    c.push_back({"measured_damping_decrements", [](const R& r) -> CellValue { return cycles(r.measured->damping_ratio); }, Output::JsonOnly});
+    c.push_back({"simulated_damping_decrements", [](const R& r) -> CellValue { return cycles(r.simulated->damping_ratio); }, Output::JsonOnly});
     return Section<R>{
         std::move(c),
         [](const R& r) { return r.c->key.title(); },
@@ -197,6 +246,94 @@ const Section<CalibrationRow>& calibrationSection() {
          {"correlation", md::number("correlation_mean", 3)}}};
   }();
   return section;
+}
+
+// --- JSON-only sections: pooled calibration-weight cases, correlations (Section 3.1) ---
+
+const Section<CaseSummaryRow>& calibrationCasesSection() {
+  using R = CaseSummaryRow;
+  static const Section<R> section{
+      {{"case", [](const R& r) -> CellValue { return r.c->key.label(); }},
+       {"tool", [](const R& r) -> CellValue { return r.c->key.tool; }},
+       {"mass_kg", [](const R& r) -> CellValue { return r.c->key.mass_kg; }},
+       {"repeats", [](const R& r) -> CellValue { return static_cast<long long>(r.c->repeats.size()); }},
+       {"signal", [](const R& r) -> CellValue { return r.signal; }},
+       {"steady_value_mean", [](const R& r) -> CellValue { return r.summary->steady.mean; }},
+       {"steady_value_std", [](const R& r) -> CellValue { return r.summary->steady.std_dev; }},
+       {"frequency_mean_Hz", [](const R& r) -> CellValue { return r.summary->frequency_Hz.mean; }},
+       {"frequency_std_Hz", [](const R& r) -> CellValue { return r.summary->frequency_Hz.std_dev; }},
+       {"frequency_cycles", [](const R& r) -> CellValue { return cycles(r.summary->frequency_Hz); }},
+       {"damping_ratio_mean", [](const R& r) -> CellValue { return r.summary->damping_ratio.mean; }},
+       {"damping_ratio_std", [](const R& r) -> CellValue { return r.summary->damping_ratio.std_dev; }},
+       {"damping_decrements", [](const R& r) -> CellValue { return cycles(r.summary->damping_ratio); }}},
+      [](const R& r) { return r.c->key.title(); },
+      {}};
+  return section;
+}
+
+const Section<CorrelationRow>& correlationsSection() {
+  using R = CorrelationRow;
+  static const Section<R> section{
+      {{"case", [](const R& r) -> CellValue { return r.c->key.label(); }},
+       {"measured_repeat", [](const R& r) -> CellValue { return static_cast<long long>(r.correlation->measured_repeat); }},
+       {"force_correlation", [](const R& r) -> CellValue { return r.correlation->force.correlation; }},
+       {"force_shift_s", [](const R& r) -> CellValue { return r.correlation->force.shift_s; }},
+       {"deformation_correlation", [](const R& r) -> CellValue { return r.correlation->deformation.correlation; }},
+       {"deformation_shift_s", [](const R& r) -> CellValue { return r.correlation->deformation.shift_s; }}},
+      [](const R& r) { return r.c->key.title(); },
+      {}};
+  return section;
+}
+
+// --- the rows ---
+
+std::vector<ResponseRow> calibrationRunRows(const EvaluationResult& result) {
+  std::vector<ResponseRow> rows;
+  for (const auto& r : result.calibration_runs)
+    for (const auto& [signal, response] : bothSignals(r.force, r.deformation)) rows.push_back({&r, signal, response});
+  return rows;
+}
+
+std::vector<CaseSummaryRow> calibrationCaseRows(const EvaluationResult& result) {
+  std::vector<CaseSummaryRow> rows;
+  for (const auto& c : result.calibration_cases)
+    for (const auto& [signal, summary] : bothSignals(c.force, c.deformation)) rows.push_back({&c, signal, summary});
+  return rows;
+}
+
+std::vector<const SoilBinComparison*> meansRows(const ComparisonResult& result) {
+  std::vector<const SoilBinComparison*> rows;
+  for (const auto& c : result.soil_bin) rows.push_back(&c);
+  return rows;
+}
+
+std::vector<SpectrumRow> spectrumRows(const ComparisonResult& result) {
+  std::vector<SpectrumRow> rows;
+  for (const auto& c : result.soil_bin)
+    for (const auto& [signal, spectrum] : bothSignals(c.force_spectrum, c.deformation_spectrum)) rows.push_back({&c, signal, spectrum});
+  return rows;
+}
+
+// Deformation first, then force (the order of calibration.csv); the correlation is the mean over
+// the measured repeats.
+std::vector<CalibrationRow> calibrationRows(const ComparisonResult& result) {
+  std::vector<CalibrationRow> rows;
+  for (const auto& c : result.calibration)
+    for (const bool is_force : {false, true}) {
+      double correlation = 0.0;
+      for (const auto& corr : c.correlations) correlation += (is_force ? corr.force : corr.deformation).correlation;
+      correlation /= static_cast<double>(c.correlations.size());
+      rows.push_back({&c, is_force ? "force_N" : "deformation_mm", is_force ? &c.measured.force : &c.measured.deformation,
+                      is_force ? &c.simulated.force : &c.simulated.deformation, correlation});
+    }
+  return rows;
+}
+
+std::vector<CorrelationRow> correlationRows(const ComparisonResult& result) {
+  std::vector<CorrelationRow> rows;
+  for (const auto& c : result.calibration)
+    for (const auto& corr : c.correlations) rows.push_back({&c, &corr});
+  return rows;
 }
 
 }  // namespace demfem::analysis::detail

@@ -1,5 +1,5 @@
 // The tables of the analysis reports (workflow_output.cpp writes their CSV and Markdown,
-// workflow_json.cpp takes JSON objects of their columns): each declared once, here
+// workflow_json.cpp their JSON): each declared once, here, with the rows it is made of
 // (report_section.hpp says how a section renders).
 #pragma once
 
@@ -8,6 +8,7 @@
 #include "report_section.hpp"
 
 #include <string>
+#include <vector>
 
 namespace demfem::analysis::detail {
 
@@ -34,13 +35,39 @@ struct CalibrationRow {
   double correlation;  // mean over the measured repeats
 };
 
-// demfem evaluate: soil_bin_runs.csv, soil_bin_cases.csv, calibration_runs.csv.
+// One signal (force_N or deformation_mm) of one calibration-weight case, repeats pooled.
+struct CaseSummaryRow {
+  const CalibrationCase* c;
+  std::string signal;
+  const ResponseSummary* summary;
+};
+
+// One measured repeat of a calibration-weight case correlated with the first simulated run.
+struct CorrelationRow {
+  const CalibrationComparison* c;
+  const SignalCorrelation* correlation;
+};
+
+// demfem evaluate: soil_bin_runs.csv, soil_bin_cases.csv, calibration_runs.csv; the pooled
+// calibration-weight cases in the JSON only.
 const Section<EvaluatedRun>& soilBinRunsSection();
 const Section<PooledCase>& soilBinCasesSection();
 const Section<ResponseRow>& calibrationRunsSection();
-// demfem compare: means.csv (Fig. 15), spectra.csv (Fig. 17), calibration.csv (Figs. 7, 8).
+const Section<CaseSummaryRow>& calibrationCasesSection();
+// demfem compare: means.csv (Fig. 15), spectra.csv (Fig. 17), calibration.csv (Figs. 7, 8); the
+// correlation of each measured repeat in the JSON only.
 const Section<const SoilBinComparison*>& meansSection();
 const Section<SpectrumRow>& spectraSection();
 const Section<CalibrationRow>& calibrationSection();
+const Section<CorrelationRow>& correlationsSection();
+
+// The rows of those sections, in the order of the results; each signal's force_N row first for the
+// runs, cases and spectra, deformation_mm first for calibration.csv.
+std::vector<ResponseRow> calibrationRunRows(const EvaluationResult& result);
+std::vector<CaseSummaryRow> calibrationCaseRows(const EvaluationResult& result);
+std::vector<const SoilBinComparison*> meansRows(const ComparisonResult& result);
+std::vector<SpectrumRow> spectrumRows(const ComparisonResult& result);
+std::vector<CalibrationRow> calibrationRows(const ComparisonResult& result);
+std::vector<CorrelationRow> correlationRows(const ComparisonResult& result);
 
 }  // namespace demfem::analysis::detail

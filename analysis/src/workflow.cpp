@@ -102,6 +102,54 @@ SpectralComparison compareSpectra(const std::vector<const EvaluatedRun*>& measur
   return result;
 }
 
+// The cases of both sides paired by key as Comparison{key, measured, simulated}, in the measured
+// order; every case on one side only is added to `unmatched` (measured ones first).
+template <class Comparison, class Case>
+std::vector<Comparison> pairCases(const std::vector<Case>& measured, const std::vector<Case>& simulated, std::vector<std::string>& unmatched) {
+  const auto find = [](const std::vector<Case>& cases, const CaseKey& key) {
+    return std::find_if(cases.begin(), cases.end(), [&key](const Case& c) { return c.key == key; });
+  };
+  std::vector<Comparison> pairs;
+  for (const Case& m : measured) {
+    const auto s = find(simulated, m.key);
+    if (s == simulated.end()) unmatched.push_back(m.key.title() + " (measured only)");
+    else pairs.push_back(Comparison{m.key, m, *s});
+  }
+  for (const Case& s : simulated)
+    if (find(measured, s.key) == measured.end()) unmatched.push_back(s.key.title() + " (simulated only)");
+  return pairs;
+}
+
+// Differences of the pooled means (Fig. 15) and spectra (Fig. 17) of one paired soil-bin case.
+void compareSoilBinCase(SoilBinComparison& c, const std::vector<const EvaluatedRun*>& measured_runs,
+                        const std::vector<const EvaluatedRun*>& simulated_runs, const AnalysisSettings& settings) {
+  c.force_difference_percent = percentDifference(c.measured.force_mean_N, c.simulated.force_mean_N);
+  c.deformation_difference_percent = percentDifference(c.measured.deformation_mean_mm, c.simulated.deformation_mean_mm);
+  const std::string what = "case " + c.key.title();
+  c.force_spectrum = compareSpectra(measured_runs, simulated_runs, false, settings, what + ", force spectrum");
+  // A rigid tool (a DEM simulation's draught) records no deformation on either side: no spectrum.
+  const auto rigid = [](const std::vector<const EvaluatedRun*>& runs) {
+    return std::all_of(runs.begin(), runs.end(), [](const EvaluatedRun* r) {
+      return std::all_of(r->curve.deformation_mm.begin(), r->curve.deformation_mm.end(), [](double d) { return d == 0.0; });
+    });
+  };
+  if (!rigid(measured_runs) || !rigid(simulated_runs))
+    c.deformation_spectrum = compareSpectra(measured_runs, simulated_runs, true, settings, what + ", deformation spectrum");
+}
+
+// A measured calibration-weight run correlated with the simulated one after aligning their first
+// local maxima (Section 3.1).
+SignalCorrelation correlate(const CalibrationRun& run, const CalibrationRun& sim) {
+  SignalCorrelation corr;
+  corr.measured_repeat = run.repeat;
+  const std::string what = run.source.string() + " against " + sim.source.string();
+  corr.force = correlateAligned(run.time_s, run.force_N, run.force.first_peak_time_s, sim.time_s, sim.force_N, sim.force.first_peak_time_s,
+                                what + " (force)");
+  corr.deformation = correlateAligned(run.time_s, run.deformation_mm, run.deformation.first_peak_time_s, sim.time_s, sim.deformation_mm,
+                                      sim.deformation.first_peak_time_s, what + " (deformation)");
+  return corr;
+}
+
 }  // namespace
 
 double percentDifference(double measured, double simulated) {
@@ -156,62 +204,19 @@ ComparisonResult compare(const std::vector<Recording>& measured, const std::vect
 
   const auto measured_runs = detail::groupByCase(result.measured.soil_bin_runs);
   const auto simulated_runs = detail::groupByCase(result.simulated.soil_bin_runs);
-  for (const auto& m : result.measured.soil_bin_cases) {
-    const auto s = std::find_if(result.simulated.soil_bin_cases.begin(), result.simulated.soil_bin_cases.end(),
-                                [&](const PooledCase& c) { return c.key == m.key; });
-    if (s == result.simulated.soil_bin_cases.end()) {
-      result.unmatched_cases.push_back(m.key.title() + " (measured only)");
-      continue;
-    }
-    SoilBinComparison c;
-    c.key = m.key;
-    c.measured = m;
-    c.simulated = *s;
-    c.force_difference_percent = percentDifference(m.force_mean_N, s->force_mean_N);
-    c.deformation_difference_percent = percentDifference(m.deformation_mean_mm, s->deformation_mean_mm);
-    const std::string what = "case " + m.key.title();
-    c.force_spectrum = compareSpectra(measured_runs.at(m.key), simulated_runs.at(m.key), false, settings, what + ", force spectrum");
-    // A rigid tool (a DEM simulation's draught) records no deformation on either side: no spectrum.
-    const auto rigid = [](const std::vector<const EvaluatedRun*>& runs) {
-      return std::all_of(runs.begin(), runs.end(), [](const EvaluatedRun* r) {
-        return std::all_of(r->curve.deformation_mm.begin(), r->curve.deformation_mm.end(), [](double d) { return d == 0.0; });
-      });
-    };
-    if (!rigid(measured_runs.at(m.key)) || !rigid(simulated_runs.at(m.key)))
-      c.deformation_spectrum = compareSpectra(measured_runs.at(m.key), simulated_runs.at(m.key), true, settings, what + ", deformation spectrum");
+  for (SoilBinComparison& c :
+       pairCases<SoilBinComparison>(result.measured.soil_bin_cases, result.simulated.soil_bin_cases, result.unmatched_cases)) {
+    compareSoilBinCase(c, measured_runs.at(c.key), simulated_runs.at(c.key), settings);
     result.soil_bin.push_back(std::move(c));
   }
-  for (const auto& s : result.simulated.soil_bin_cases)
-    if (!measured_runs.contains(s.key)) result.unmatched_cases.push_back(s.key.title() + " (simulated only)");
-
   const auto measured_calibration = detail::groupByCase(result.measured.calibration_runs);
   const auto simulated_calibration = detail::groupByCase(result.simulated.calibration_runs);
-  for (const auto& m : result.measured.calibration_cases) {
-    const auto s = std::find_if(result.simulated.calibration_cases.begin(), result.simulated.calibration_cases.end(),
-                                [&](const CalibrationCase& c) { return c.key == m.key; });
-    if (s == result.simulated.calibration_cases.end()) {
-      result.unmatched_cases.push_back(m.key.title() + " (measured only)");
-      continue;
-    }
-    CalibrationComparison c;
-    c.key = m.key;
-    c.measured = m;
-    c.simulated = *s;
-    const CalibrationRun& sim = *simulated_calibration.at(m.key).front();
-    for (const CalibrationRun* run : measured_calibration.at(m.key)) {
-      SignalCorrelation corr;
-      corr.measured_repeat = run->repeat;
-      const std::string what = run->source.string() + " against " + sim.source.string();
-      corr.force = correlateAligned(run->time_s, run->force_N, run->force.first_peak_time_s, sim.time_s, sim.force_N, sim.force.first_peak_time_s,
-                                    what + " (force)");
-      corr.deformation = correlateAligned(run->time_s, run->deformation_mm, run->deformation.first_peak_time_s, sim.time_s, sim.deformation_mm,
-                                          sim.deformation.first_peak_time_s, what + " (deformation)");
-      c.correlations.push_back(corr);
-    }
+  for (CalibrationComparison& c :
+       pairCases<CalibrationComparison>(result.measured.calibration_cases, result.simulated.calibration_cases, result.unmatched_cases)) {
+    const CalibrationRun& sim = *simulated_calibration.at(c.key).front();
+    for (const CalibrationRun* run : measured_calibration.at(c.key)) c.correlations.push_back(correlate(*run, sim));
     result.calibration.push_back(std::move(c));
   }
-  for (const auto& s : result.simulated.calibration_cases)
-    if (!measured_calibration.contains(s.key)) result.unmatched_cases.push_back(s.key.title() + " (simulated only)");
 
   if (result.soil_bin.empty() && result.calibration.empty())
     throw InputError("no case appears among both the measured and the simulated recordings (cases are matched by the sidecars' tool and "

@@ -253,11 +253,7 @@ std::string writeEvaluationTables(const EvaluationResult& result, StagedOutput& 
        << soilBinCasesSection().markdownOf(result.soil_bin_cases) << "\n";
   }
   if (!result.calibration_runs.empty()) {
-    std::vector<ResponseRow> rows;
-    for (const auto& r : result.calibration_runs) {
-      rows.push_back({&r, "force_N", &r.force});
-      rows.push_back({&r, "deformation_mm", &r.deformation});
-    }
+    const std::vector<ResponseRow> rows = calibrationRunRows(result);
     out.writeText("calibration_runs.csv", calibrationRunsSection().csv(rows));
     md << "### Calibration-weight runs\n\nSteady value, frequency and damping ratio fitted to the whole record (damped step response); ± the "
           "standard deviation over the cycles (count in brackets).\n\n"
@@ -296,15 +292,12 @@ namespace {
 
 void writeSoilBinSection(const ComparisonResult& result, StagedOutput& out, const GnuplotRenderer* renderer,
                          std::ostringstream& md) {
-  std::vector<const SoilBinComparison*> cases;
-  std::vector<SpectrumRow> spectrum_rows;
+  const std::vector<const SoilBinComparison*> cases = meansRows(result);
+  const std::vector<SpectrumRow> spectrum_rows = spectrumRows(result);
   std::vector<const PooledCase*> measured, simulated;
   for (const auto& c : result.soil_bin) {
-    cases.push_back(&c);
     measured.push_back(&c.measured);
     simulated.push_back(&c.simulated);
-    spectrum_rows.push_back({&c, "force_N", &c.force_spectrum});
-    spectrum_rows.push_back({&c, "deformation_mm", &c.deformation_spectrum});
     const auto sim_runs = detail::groupByCase(result.simulated.soil_bin_runs).at(c.key);
     const auto meas_runs = detail::groupByCase(result.measured.soil_bin_runs).at(c.key);
     for (std::size_t r = 0; r < meas_runs.size(); ++r)
@@ -339,21 +332,12 @@ void writeSoilBinSection(const ComparisonResult& result, StagedOutput& out, cons
 
 void writeCalibrationSection(const ComparisonResult& result, StagedOutput& out, const GnuplotRenderer* renderer,
                              std::ostringstream& md) {
-  std::vector<CalibrationRow> rows;
+  const std::vector<CalibrationRow> rows = calibrationRows(result);
   const auto simulated_runs = detail::groupByCase(result.simulated.calibration_runs);
   const auto measured_runs = detail::groupByCase(result.measured.calibration_runs);
   md << "## Calibration-weight cases (Section 3.1, Figs. 7, 8)\n\n";
   std::ostringstream figures;
   for (const auto& c : result.calibration) {
-    for (const bool is_force : {false, true}) {
-      const ResponseSummary& m = is_force ? c.measured.force : c.measured.deformation;
-      const ResponseSummary& s = is_force ? c.simulated.force : c.simulated.deformation;
-      double correlation = 0.0;
-      for (const auto& corr : c.correlations) correlation += (is_force ? corr.force : corr.deformation).correlation;
-      correlation /= static_cast<double>(c.correlations.size());
-      const std::string signal = is_force ? "force_N" : "deformation_mm";
-      rows.push_back({&c, signal, &m, &s, correlation});
-    }
     // Align every curve on the first measured repeat: repeat k moves by (its shift to the
     // simulation) - (the first repeat's), the simulation by the first repeat's shift.
     const auto& first = c.correlations.front();

@@ -31,8 +31,21 @@ inline void addAnalysisOptions(CLI::App& cmd, AnalysisOptions& options) {
       ->check(CLI::IsMember({"force", "deformation"}))
       ->capture_default_str();
   cmd.add_option("--baseline-s", e.baseline_duration_s, "Leading span averaged for the initial deformation value (s)")->capture_default_str();
-  cmd.add_flag("--no-plots", options.no_plots, "Do not draw plots (the report says so)");
-  cmd.add_option("--gnuplot", options.gnuplot, "gnuplot executable used for the SVG plots")->capture_default_str();
+  addPlotOptions(cmd, options.no_plots, options.gnuplot, "SVG plots");
+}
+
+// Adds the analysis command `name` (`description`: its --help text) with the options above, the
+// output directory `out_dir` by default, and `--json FILE`; returns the command and the JSON target.
+struct AnalysisCommand {
+  CLI::App* cmd;
+  std::string* json_target;
+};
+inline AnalysisCommand addAnalysisCommand(CLI::App& app, const std::string& name, const std::string& description,
+                                          AnalysisOptions& options, const std::string& out_dir) {
+  options.out_dir = out_dir;
+  CLI::App* cmd = app.add_subcommand(name, description);
+  addAnalysisOptions(*cmd, options);
+  return {cmd, &addJsonOption(*cmd)};
 }
 
 // Checks the option values; throws InputError (exit code 2) for inconsistent ones.

@@ -139,8 +139,7 @@ void addCampaignCommand(CLI::App& app) {
   cmd->add_option("--convergence", o->convergence, "With --report: the time-step table of demfem-bench-paper-convergence --json FILE")
       ->check(CLI::ExistingFile);
   cmd->add_option("--label", o->label, "Text the report names its runs by (e.g. the source revision they came from)");
-  cmd->add_option("--gnuplot", o->gnuplot, "gnuplot executable for the report's SVG plots")->capture_default_str();
-  cmd->add_flag("--no-plots", o->no_plots, "Report without plots");
+  addPlotOptions(*cmd, o->no_plots, o->gnuplot, "report's SVG plots");
   cmd->add_flag("--quiet", o->quiet, "No progress on stderr");
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([o, &json_target] {

@@ -15,19 +15,19 @@ void addCompareCommand(CLI::App& app) {
     std::string simulated_tool;
   };
   auto options = std::make_shared<Options>();
-  options->analysis.out_dir = "comparison";
-  auto* cmd = app.add_subcommand("compare",
-                                 "Compare measured and simulated recordings case by case (tool + depth_mm or mass_kg from the sidecars): "
-                                 "mean differences, FFT power-law fits, calibration-weight frequency, damping and correlation");
+  const AnalysisCommand command = addAnalysisCommand(app, "compare",
+      "Compare measured and simulated recordings case by case (tool + depth_mm or mass_kg from the sidecars): "
+      "mean differences, FFT power-law fits, calibration-weight frequency, damping and correlation",
+      options->analysis, "comparison");
+  CLI::App* cmd = command.cmd;
   cmd->add_option("measured", options->measured, "Measured recording or directory of recordings")->required();
   cmd->add_option("simulated", options->simulated, "Simulated recording or directory of recordings")->required();
-  addAnalysisOptions(*cmd, options->analysis);
   cmd->add_option("--simulated-tool", options->simulated_tool,
                   "Treat every simulated recording as this tool (the FEM client's sidecar names the tool after the study's tool "
                   "entry). Not needed when each side has one tool: cases are then matched by depth or mass");
   cmd->add_option("--fft-low-hz", options->analysis.settings.fft_low_Hz, "Lowest frequency of the power-law fits (default: common band)");
   cmd->add_option("--fft-high-hz", options->analysis.settings.fft_high_Hz, "Highest frequency of the power-law fits (default: common band)");
-  std::string& json_target = addJsonOption(*cmd);
+  std::string& json_target = *command.json_target;
   cmd->callback([options, &json_target] {
     runAnalysis([&] {
       finishAnalysisOptions(options->analysis);

@@ -144,8 +144,7 @@ void addCptOptions(CLI::App& cmd, CptOptions& o) {
       ->check(CLI::ExistingFile);
   cmd.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM (default: the study's dem.threads)")->check(CLI::PositiveNumber);
   cmd.add_flag("--allow-unsettled-soil", o.allow_unsettled_soil, "Run even if the settled soil is not settled");
-  cmd.add_flag("--no-plots", o.no_plots, "Do not draw plots");
-  cmd.add_option("--gnuplot", o.gnuplot, "gnuplot executable of the SVG and PNG plots")->capture_default_str();
+  addPlotOptions(cmd, o.no_plots, o.gnuplot, "SVG and PNG plots");
   cmd.add_flag("--quiet", o.quiet, "No progress output");
 }
 

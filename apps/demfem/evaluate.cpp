@@ -13,13 +13,13 @@ void addEvaluateCommand(CLI::App& app) {
     std::vector<std::string> inputs;
   };
   auto options = std::make_shared<Options>();
-  options->analysis.out_dir = "evaluation";
-  auto* cmd = app.add_subcommand("evaluate",
-                                 "Evaluate soil-bin and calibration-weight recordings (paper Section 2.3): RUN.csv with a sidecar RUN.json, "
-                                 "or directories of them; repeats of one case (tool + depth_mm or mass_kg) are pooled");
+  const AnalysisCommand command = addAnalysisCommand(app, "evaluate",
+      "Evaluate soil-bin and calibration-weight recordings (paper Section 2.3): RUN.csv with a sidecar RUN.json, "
+      "or directories of them; repeats of one case (tool + depth_mm or mass_kg) are pooled",
+      options->analysis, "evaluation");
+  CLI::App* cmd = command.cmd;
   cmd->add_option("recordings", options->inputs, "Recordings (CSV + JSON sidecar of the same stem) or directories holding them")->required();
-  addAnalysisOptions(*cmd, options->analysis);
-  std::string& json_target = addJsonOption(*cmd);
+  std::string& json_target = *command.json_target;
   cmd->callback([options, &json_target] {
     runAnalysis([&] {
       finishAnalysisOptions(options->analysis);

@@ -83,8 +83,7 @@ void addSoilMotionCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--tool", o->tool, "Tool whose motion is analysed (default: the run's only tool)");
   cmd->add_option("--out", o->out_dir, "Output directory")->capture_default_str();
-  cmd->add_flag("--no-plots", o->no_plots, "Do not draw plots");
-  cmd->add_option("--gnuplot", o->gnuplot, "gnuplot executable of the SVG and PNG plots")->capture_default_str();
+  addPlotOptions(*cmd, o->no_plots, o->gnuplot, "SVG and PNG plots");
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([o, &json_target] {
     runAnalysis([&] {

@@ -13,7 +13,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 
 namespace {
 
@@ -23,12 +22,6 @@ using namespace demfem;
 using bench::weight;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-nlohmann::ordered_json readJson(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error("cannot read " + file.string());
-  return nlohmann::ordered_json::parse(in);
-}
 
 }  // namespace
 
@@ -42,7 +35,7 @@ int main(int argc, char** argv) {
   app.add_option("--jobs", jobs, "cases run concurrently in the calibration")->check(CLI::PositiveNumber)->capture_default_str();
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
-    const nlohmann::ordered_json study = readJson(study_file);
+    const nlohmann::ordered_json study = cli::readJsonFile(study_file);
     const double E0 = study["tools"][0]["fem"]["E_Pa"], alpha0 = study["tools"][0]["fem"]["alpha_s"];
     const double E_true = 1.08 * E0, alpha_true = 1.3 * alpha0;
     nlohmann::ordered_json truth = study;

@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
-#include <fstream>
 
 namespace {
 
@@ -21,12 +20,6 @@ using namespace demfem;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 double cpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
-
-nlohmann::ordered_json readJson(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error("cannot read " + file.string());
-  return nlohmann::ordered_json::parse(in);
-}
 
 // EI / L of the tool's free part (below the clamp), N m/rad.
 double freePartEiOverL(const nlohmann::ordered_json& tool) {
@@ -48,7 +41,7 @@ int main(int argc, char** argv) {
   app.add_option("--jobs", jobs, "cases run concurrently")->check(CLI::PositiveNumber)->capture_default_str();
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
-    const nlohmann::ordered_json study = readJson(study_file);
+    const nlohmann::ordered_json study = cli::readJsonFile(study_file);
     nlohmann::ordered_json truth = study;
     const double k_true = clamp_ei_l * freePartEiOverL(study["tools"][0]);
     truth["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = k_true;

@@ -28,12 +28,6 @@ using namespace demfem;
 std::atomic<bool> g_stop{false};
 extern "C" void onStop(int) { g_stop = true; }
 
-nlohmann::ordered_json readJson(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error("cannot read " + file.string());
-  return nlohmann::ordered_json::parse(in);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -56,7 +50,7 @@ int main(int argc, char** argv) {
   app.add_option("--jobs", jobs, "cases at once")->check(CLI::PositiveNumber)->capture_default_str();
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
-    const nlohmann::ordered_json base = readJson(study_file);
+    const nlohmann::ordered_json base = cli::readJsonFile(study_file);
     const fs::path studies = fs::path(work) / "studies";
     fs::create_directories(studies);
     std::vector<fs::path> files;

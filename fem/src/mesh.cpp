@@ -89,6 +89,27 @@ class MshReader {
     if (!((s >> values) && ...)) fail(std::string("cannot read ") + what + " from '" + line + "'");
   }
 
+  // The number of entity blocks of a $Nodes or $Elements section (`what`: "node" or "element"),
+  // from its header line: blocks, entries, lowest tag, highest tag.
+  long sectionBlocks(const std::string& what) {
+    long blocks = 0, entries = 0, min_tag = 0, max_tag = 0;
+    parse(nextRequired((what + " header").c_str()), (what + " section header").c_str(), blocks, entries, min_tag, max_tag);
+    return blocks;
+  }
+
+  // An entity block's header line: dimension, entity tag, the section's per-block value (nodes:
+  // parametric flag, elements: Gmsh element type) and the number of entries.
+  struct BlockHeader {
+    int dim = 0, entity = 0, value = 0;
+    long entries = 0;
+  };
+  BlockHeader blockHeader(const std::string& what) {
+    BlockHeader h;
+    const std::string name = what + " block header";
+    parse(nextRequired(name.c_str()), name.c_str(), h.dim, h.entity, h.value, h.entries);
+    return h;
+  }
+
  private:
   std::filesystem::path file_;
   std::ifstream in_;
@@ -122,13 +143,9 @@ Mesh readGmshMesh(const std::filesystem::path& file, double scale_to_m) {
       format_seen = true;
     } else if (line == "$Nodes") {
       if (!format_seen) r.fail("$Nodes before $MeshFormat");
-      long blocks = 0, count = 0, min_tag = 0, max_tag = 0;
-      r.parse(r.nextRequired("node header"), "node section header", blocks, count, min_tag, max_tag);
+      const long blocks = r.sectionBlocks("node");
       for (long b = 0; b < blocks; ++b) {
-        int dim = 0, entity = 0, parametric = 0;
-        long n = 0;
-        r.parse(r.nextRequired("node block header"), "node block header", dim, entity, parametric, n);
-        std::vector<long> tags(static_cast<std::size_t>(n));
+        std::vector<long> tags(static_cast<std::size_t>(r.blockHeader("node").entries));
         for (auto& t : tags) r.parse(r.nextRequired("node tag"), "node tag", t);
         for (long t : tags) {
           double x = 0, y = 0, z = 0;
@@ -138,13 +155,12 @@ Mesh readGmshMesh(const std::filesystem::path& file, double scale_to_m) {
       }
     } else if (line == "$Elements") {
       if (!format_seen) r.fail("$Elements before $MeshFormat");
-      long blocks = 0, count = 0, min_tag = 0, max_tag = 0;
-      r.parse(r.nextRequired("element header"), "element section header", blocks, count, min_tag, max_tag);
+      const long blocks = r.sectionBlocks("element");
       for (long b = 0; b < blocks; ++b) {
-        int dim = 0, entity = 0, gmsh_type = 0;
-        long n = 0;
-        r.parse(r.nextRequired("element block header"), "element block header", dim, entity, gmsh_type, n);
-        const bool keep = dim == 3;
+        const auto block = r.blockHeader("element");
+        const int gmsh_type = block.value;
+        const long n = block.entries;
+        const bool keep = block.dim == 3;
         if (keep && gmsh_type != 17 && gmsh_type != 11)
           r.fail("volume element type " + std::to_string(gmsh_type) +
                  " is not supported: use 20-node hexahedra (17) or 10-node tetrahedra (11), "

@@ -1,10 +1,10 @@
 #include "demfem/adapter/plate_surface.hpp"
+#include "support/closed_surface.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <array>
 #include <cmath>
-#include <map>
 
 using demfem::adapter::makePlateSurface;
 
@@ -21,22 +21,8 @@ TEST_CASE("paper PMMA plate on the 5 mm grid has 41 x 9 x 2 keypoints", "[adapte
 TEST_CASE("plate surface is closed and outward oriented: divergence theorem gives the volume", "[adapter]") {
   const double L = 0.2, W = 0.04, T = 0.012;
   const auto s = makePlateSurface(L, W, T, 0.005);
-  double volume = 0;
-  std::map<std::pair<int, int>, int> edge_use;
-  for (const auto& t : s.triangles) {
-    const auto& a = s.nodes[t[0]];
-    const auto& b = s.nodes[t[1]];
-    const auto& c = s.nodes[t[2]];
-    volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-               a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
-    for (int e = 0; e < 3; ++e) ++edge_use[{t[e], t[(e + 1) % 3]}];
-  }
-  CHECK(volume == Approx(L * W * T).epsilon(1e-12));
   // Closed and consistently oriented: every directed edge used once, its reverse once.
-  for (const auto& [edge, count] : edge_use) {
-    CHECK(count == 1);
-    CHECK(edge_use.count({edge.second, edge.first}) == 1);
-  }
+  CHECK(demfem::support::closedVolume(s) == Approx(L * W * T).epsilon(1e-12));
   // Interior grid nodes (thickness 12 mm has interior layers) are not keypoints.
   CHECK(s.nz == 3);
   CHECK(s.id(4, 20, 1) == -1);

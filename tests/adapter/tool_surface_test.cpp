@@ -1,44 +1,20 @@
 #include "demfem/adapter/tool_surface.hpp"
+#include "support/closed_surface.hpp"
+#include "support/study_in_code.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
-#include <map>
 #include <numbers>
 
 using namespace demfem;
 
-namespace {
-
-// Volume enclosed by a triangulation (divergence theorem); requires every directed edge once and its
-// reverse once (closed, consistently oriented).
-double closedVolume(const adapter::ToolSurface& s) {
-  double volume = 0;
-  std::map<std::pair<int, int>, int> edge_use;
-  for (const auto& t : s.triangles) {
-    const auto& a = s.nodes[t[0]];
-    const auto& b = s.nodes[t[1]];
-    const auto& c = s.nodes[t[2]];
-    volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-               a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
-    for (int e = 0; e < 3; ++e) ++edge_use[{t[e], t[(e + 1) % 3]}];
-  }
-  for (const auto& [edge, count] : edge_use) {
-    REQUIRE(count == 1);
-    REQUIRE(edge_use.count({edge.second, edge.first}) == 1);
-  }
-  return volume;
-}
-
-}  // namespace
+using support::closedVolume;
 
 TEST_CASE("the paper's 5 cm^2 60 deg penetrometer is a closed cone and shaft of the projected area", "[adapter]") {
   study::Tool tool;
   tool.name = "cone1";
-  tool.geometry.kind = study::GeometryKind::Cone;
-  tool.geometry.cone_area_m2 = 5e-4;
-  tool.geometry.cone_angle_rad = std::numbers::pi / 3;
-  tool.geometry.length_m = 0.1;
+  support::usePaperCone(tool, 0.1);
   tool.geometry.keypoint_spacing_m = 0.005;
   const auto s = adapter::toolSurface(tool);
   const double r = std::sqrt(5e-4 / std::numbers::pi), h = r / std::tan(std::numbers::pi / 6);

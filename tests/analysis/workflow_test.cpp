@@ -8,6 +8,8 @@
 
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 using namespace demfem::analysis;
 using demfem::support::TempDir;
@@ -20,6 +22,37 @@ std::string readText(const fs::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+// Every cell of the CSV table `csv` equals the value of its column in the JSON row of the same
+// index (the CSV's %.10g numbers to 1e-9, text as it is, "nan" for null): both are generated from
+// one declaration of the table's columns.
+void checkCsvMatchesJson(const std::string& csv, const nlohmann::json& rows) {
+  std::istringstream lines(csv);
+  const auto split = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::istringstream in(line);
+    for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  std::string line;
+  std::getline(lines, line);
+  const std::vector<std::string> header = split(line);
+  std::size_t row = 0;
+  for (; std::getline(lines, line); ++row) {
+    REQUIRE(row < rows.size());
+    const std::vector<std::string> cells = split(line);
+    REQUIRE(cells.size() == header.size());
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      INFO("column " << header[i] << ", row " << row);
+      const nlohmann::json& value = rows[row].at(header[i]);
+      if (value.is_null()) CHECK(cells[i] == "nan");
+      else if (value.is_number()) CHECK(std::stod(cells[i]) == Approx(value.get<double>()).epsilon(1e-9));
+      else if (value.is_boolean()) CHECK(cells[i] == (value.get<bool>() ? "true" : "false"));
+      else CHECK(cells[i] == value.get<std::string>());
+    }
+  }
+  CHECK(row == rows.size());
 }
 
 // Measured: 2 raw repeats of PMMA 30 mm plus one raw 1 kg weight drop. Simulated: the same cases in
@@ -93,8 +126,13 @@ TEST_CASE("compare recovers mean differences, spectral exponents and calibration
   CHECK(w.correlations.front().deformation.correlation > 0.3);
 
   const auto json = toJson(result, settings);
-  CHECK(json["soil_bin_cases"][0]["force_mean_difference_percent"].get<double>() == Approx(c.force_difference_percent));
-  CHECK(json["calibration_cases"][0]["measured"]["deformation"]["frequency_mean_Hz"].get<double>() == Approx(3.0).epsilon(0.01));
+  // One object per row of means.csv and calibration.csv, keyed by the CSV's column names.
+  CHECK(json["means"][0]["force_difference_percent"].get<double>() == Approx(c.force_difference_percent));
+  CHECK(json["means"][0]["measured_repeats"] == c.measured.repeats.size());  // a JSON-only column
+  REQUIRE(json["calibration"].size() == 2);
+  CHECK(json["calibration"][0]["signal"] == "deformation_mm");
+  CHECK(json["calibration"][0]["measured_frequency_mean_Hz"].get<double>() == Approx(3.0).epsilon(0.01));
+  CHECK(json["correlations"][0]["deformation_shift_s"].get<double>() == Approx(w.correlations.front().deformation.shift_s));
   CHECK(json["settings"]["fft_high_Hz"].get<double>() == 20.0);
 }
 
@@ -132,6 +170,9 @@ TEST_CASE("evaluate and compare write tables, evaluated curves, SVG plots and a 
   CHECK_THAT(readText(dir / "evaluation" / "plots" / "PMMA_30mm_curves.svg"), Catch::Contains("</svg>"));
   // No staged leftovers.
   for (const auto& entry : fs::recursive_directory_iterator(dir / "evaluation")) CHECK(entry.path().extension() != ".partial");
+  const auto evaluation_json = toJson(evaluation, settings);
+  for (const char* table : {"soil_bin_runs", "soil_bin_cases", "calibration_runs"})
+    checkCsvMatchesJson(readText(dir / "evaluation" / (std::string(table) + ".csv")), evaluation_json[table]);
 
   // The evaluated curves are a valid calibrated recording: feeding them back gives the same means.
   const auto reread = evaluate(readRecordings({dir / "evaluation" / "runs"}), settings);
@@ -151,6 +192,9 @@ TEST_CASE("evaluate and compare write tables, evaluated curves, SVG plots and a 
   const std::string means = readText(dir / "comparison" / "means.csv");
   CHECK_THAT(means, Catch::StartsWith("case,tool,depth_mm,measured_force_mean_N"));
   CHECK_THAT(means, Catch::Contains("PMMA_30mm,PMMA,30,"));
+  const auto comparison_json = toJson(comparison, settings);
+  for (const char* table : {"means", "spectra", "calibration"})
+    checkCsvMatchesJson(readText(dir / "comparison" / (std::string(table) + ".csv")), comparison_json[table]);
 }
 
 TEST_CASE("a plot that cannot be drawn fails loudly and leaves no output under a final name", "[analysis]") {

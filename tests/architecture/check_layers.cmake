@@ -36,30 +36,29 @@ foreach(layer study protocol vtkio adapter fem backends/physics backends/builtin
   endforeach()
 endforeach()
 
-# External C libraries only inside the LIGGGHTS backend's .cpp files.
-file(GLOB_RECURSE all_sources ${SOURCE_DIR}/*.hpp ${SOURCE_DIR}/*.h ${SOURCE_DIR}/*.cpp)
-foreach(f ${all_sources})
-  file(RELATIVE_PATH rel ${SOURCE_DIR} ${f})
-  if(rel MATCHES "^(build|tests/architecture)" OR rel MATCHES "^backends/liggghts/src/.*\\.cpp$")
-    continue()
-  endif()
-  file(STRINGS ${f} ext REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"](mpi\\.h|lammps\\.h|library\\.h|liggghts/)")
-  if(ext)
-    string(APPEND violations "  ${rel}: LIGGGHTS/MPI headers belong only in backends/liggghts/src/*.cpp (${ext})\n")
-  endif()
-endforeach()
+# Fails on a file outside `allowed` (a regular expression of paths relative to the root) that
+# includes a header matching `headers`; `what` says where those headers belong.
+function(check_external_headers allowed headers what)
+  foreach(f ${all_sources})
+    file(RELATIVE_PATH rel ${SOURCE_DIR} ${f})
+    if(rel MATCHES "^(build|tests/architecture)" OR rel MATCHES "${allowed}")
+      continue()
+    endif()
+    file(STRINGS ${f} ext REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"](${headers})")
+    if(ext)
+      string(APPEND violations "  ${rel}: ${what} (${ext})\n")
+    endif()
+  endforeach()
+  set(violations "${violations}" PARENT_SCOPE)
+endfunction()
 
+file(GLOB_RECURSE all_sources ${SOURCE_DIR}/*.hpp ${SOURCE_DIR}/*.h ${SOURCE_DIR}/*.cpp)
+# External C libraries only inside the LIGGGHTS backend's .cpp files.
+check_external_headers("^backends/liggghts/src/.*\\.cpp$" "mpi\\.h|lammps\\.h|library\\.h|liggghts/"
+                       "LIGGGHTS/MPI headers belong only in backends/liggghts/src/*.cpp")
 # VTK only inside vtkio/src/vtk_files.cpp (the one .cpp behind vtkio/include/demfem/vtkio/vtk_files.hpp).
-foreach(f ${all_sources})
-  file(RELATIVE_PATH rel ${SOURCE_DIR} ${f})
-  if(rel MATCHES "^(build|tests/architecture)" OR rel STREQUAL "vtkio/src/vtk_files.cpp")
-    continue()
-  endif()
-  file(STRINGS ${f} ext REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"](vtk[A-Z][A-Za-z0-9]*\\.h)")
-  if(ext)
-    string(APPEND violations "  ${rel}: VTK headers belong only in vtkio/src/vtk_files.cpp (${ext})\n")
-  endif()
-endforeach()
+check_external_headers("^vtkio/src/vtk_files\\.cpp$" "vtk[A-Z][A-Za-z0-9]*\\.h"
+                       "VTK headers belong only in vtkio/src/vtk_files.cpp")
 
 if(violations)
   message(FATAL_ERROR "dependency direction violated:\n${violations}")

@@ -3,6 +3,7 @@
 
 #include "demfem/fem/model.hpp"
 #include "demfem/study/study.hpp"
+#include "support/study_in_code.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -16,9 +17,7 @@ namespace demfem::fem::testing {
 inline study::Tool paperTool(const std::string& name, double thickness_m, double youngs_Pa, double poisson, double density_kg_m3) {
   study::Tool t;
   t.name = name;
-  t.geometry.length_m = 0.200;
-  t.geometry.width_m = 0.040;
-  t.geometry.thickness_m = thickness_m;
+  support::usePlate(t, 0.200, 0.040, thickness_m);
   t.fem.youngs_Pa = youngs_Pa;
   t.fem.poisson = poisson;
   t.fem.density_kg_m3 = density_kg_m3;
@@ -37,9 +36,7 @@ inline study::Tool steelTool() { return paperTool("S235", 0.003, 2.07e11, 0.3, 7
 inline study::Tool smallStrip() {
   study::Tool t = steelTool();
   t.name = "strip";
-  t.geometry.length_m = 0.100;
-  t.geometry.width_m = 0.010;
-  t.geometry.thickness_m = 0.004;
+  support::usePlate(t, 0.100, 0.010, 0.004);
   t.constraints.clamp_length_m = 0.020;
   t.constraints.load_cell_from_top_m = 0.030;
   t.constraints.sensor_from_top_m = 0.050;
@@ -50,9 +47,7 @@ inline study::Tool smallStrip() {
 // 40 mm (free length 300 mm, L/h = 75), the load-cell line on the clamp edge so it adds nothing.
 inline study::Tool eulerBernoulliStrip() {
   study::Tool strip = steelTool();
-  strip.geometry.length_m = 0.340;
-  strip.geometry.width_m = 0.010;
-  strip.geometry.thickness_m = 0.004;
+  support::usePlate(strip, 0.340, 0.010, 0.004);
   strip.constraints.clamp_length_m = 0.040;
   strip.constraints.load_cell_from_top_m = 0.040;
   return strip;

@@ -44,6 +44,11 @@ std::string& addJsonOption(CLI::App& cmd) {
   return *target;
 }
 
+void addPlotOptions(CLI::App& cmd, bool& no_plots, std::string& gnuplot, const std::string& plots) {
+  cmd.add_flag("--no-plots", no_plots, "Do not draw the " + plots);
+  cmd.add_option("--gnuplot", gnuplot, "gnuplot executable of the " + plots)->capture_default_str();
+}
+
 void writeJson(const std::string& target, const nlohmann::json& doc) {
   if (target.empty()) return;
   if (target == "-") {
@@ -51,6 +56,16 @@ void writeJson(const std::string& target, const nlohmann::json& doc) {
     return;
   }
   adapter::writeFileAtomically(target, doc.dump(2) + "\n");
+}
+
+nlohmann::ordered_json readJsonFile(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError("cannot read " + file.string());
+  try {
+    return nlohmann::ordered_json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(file.string() + ": not JSON: " + e.what());
+  }
 }
 
 }  // namespace demfem::cli

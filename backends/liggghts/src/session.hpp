@@ -1,6 +1,6 @@
 // Private to the LIGGGHTS backend: the MPI session, one LIGGGHTS instance, and the settled-soil
-// exchange with the backend-neutral soil file (adapter/settled_soil.hpp), shared by the engine, the
-// leader/follower code and the facade of backend.cpp. No LIGGGHTS or MPI header here: their types
+// exchange with the backend-neutral soil file (adapter/settled_soil.hpp), shared by the engine
+// (engine.hpp), the leader/follower broadcast (leader_follower.hpp) and the facade (backend.cpp). No LIGGGHTS or MPI header here: their types
 // appear only as forward declarations, the code that uses them is in mpi_session.cpp, instance.cpp
 // and soil_file.cpp (docs/liggghts-backend.md).
 #pragma once

@@ -5,6 +5,7 @@
 #include "demfem/adapter/tool_drive.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "support/study_in_code.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -24,38 +25,25 @@ namespace {
 
 // A 120 x 120 mm bin with 40 mm of soil (two layers), a 40 x 100 x 4 mm plate at 10 mm depth.
 study::Study smallStudy() {
-  study::Study s;
-  s.name = "builtin-small";
-  s.kind = study::StudyKind::Coupled;
+  study::Study s = support::binStudy("builtin-small", study::StudyKind::Coupled, 0.12, 0.12, 0.04);
   auto& soil = s.soil;
-  soil.bin_length_m = 0.12;
-  soil.bin_width_m = 0.12;
-  soil.fill_height_m = 0.04;
-  soil.materials = {{"top", 2600, 1.12e10, 0.3, 5.88e5}, {"deep", 2600, 1.12e10, 0.3, 5.88e5}, {"steel", 7933, 7.9e10, 0.3, 0}};
-  soil.bin_material = "steel";
-  soil.layers = {{"top", 0, 0.01}, {"deep", 0.01, 0.04}};
+  support::useTopAndDeepLayers(soil, 0.01);
   for (const auto& [a, b] : {std::pair{"top", "top"}, {"top", "deep"}, {"deep", "deep"}})
     soil.interactions.push_back({a, b, 0.6, 0.3, 0.1, 3e4});
   for (const char* m : {"top", "deep"}) soil.interactions.push_back({m, "steel", 0.6, 0.3, 0.1, 0});
   soil.settle_kinetic_energy_J = 1e-5;
   study::Tool tool;
   tool.dem_material = "steel";
-  tool.geometry.length_m = 0.1;
-  tool.geometry.width_m = 0.04;
-  tool.geometry.thickness_m = 0.004;
+  support::usePlate(tool, 0.1, 0.04, 0.004);
   tool.motion.depth_m = 0.01;
   tool.motion.velocity_m_s = 0.036;
   tool.motion.start_z_m = 0.03;
-  tool.motion.stroke_m = 0.06;  // within the 120 mm bin (validate checks the path)
   tool.motion.center_x_m = 0.06;  // the bin's centre line
   tool.motion.insertion_velocity_m_s = 0.05;
   tool.motion.stroke_m = 0.08;  // the path stays in the 120 mm bin (the tests drive the tool themselves)
   tool.fem = {true, 4.06e9, 0.38, 1220, 0.00055, 0, study::ElementOrder::Quadratic};  // quick.json's PMMA (the DEM ignores it)
   s.tools = {tool};
-  s.fem.dt_s = 0.001;
-  s.dem.criterion = study::TimeStepCriterion::StiffestSpring;
-  s.dem.dt_fraction = 0.1;
-  s.dem.threads = 1;
+  support::useBuiltinStep(s, 0.001);
   study::validate(s);  // the loader's gate, also for a study built in code
   return s;
 }

@@ -3,6 +3,7 @@
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "test_soil.hpp"
+#include "support/study_in_code.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -19,10 +20,7 @@ TEST_CASE("a cone pressed on a single resting sphere gets the contact law's forc
   const double radius = 0.005, delta = 1e-5;
   study::Tool tool;
   tool.name = "cone";
-  tool.geometry.kind = study::GeometryKind::Cone;
-  tool.geometry.cone_area_m2 = 5e-4;
-  tool.geometry.cone_angle_rad = std::numbers::pi / 3;
-  tool.geometry.length_m = 0.05;
+  support::usePaperCone(tool, 0.05);
   TriangleMesh mesh = toolMesh(tool);
   mesh.material = 1;
 

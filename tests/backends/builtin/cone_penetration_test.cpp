@@ -10,6 +10,7 @@
 #include "demfem/analysis/cone_penetration.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/campaign/model.hpp"
+#include "support/study_in_code.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -24,16 +25,10 @@ namespace {
 // An 80 x 200 mm bin with 60 mm of soil, three 5 cm^2 60 deg cones 50 mm apart pushed to 40 mm at
 // 20 mm/s (twice the paper's 10 mm/s to halve the test's cost; the force is recorded every 0.04 mm).
 study::Study coneStudy(bool layered) {
-  study::Study s;
-  s.name = layered ? "cpt-small-layered" : "cpt-small-unlayered";
-  s.kind = study::StudyKind::ConePenetration;
+  study::Study s = support::binStudy(layered ? "cpt-small-layered" : "cpt-small-unlayered", study::StudyKind::ConePenetration, 0.2,
+                                     0.08, 0.06);
   auto& soil = s.soil;
-  soil.bin_length_m = 0.2;
-  soil.bin_width_m = 0.08;
-  soil.fill_height_m = 0.06;
-  soil.materials = {{"top", 2600, 1.12e10, 0.3, 5.88e5}, {"deep", 2600, 1.12e10, 0.3, 5.88e5}, {"steel", 7933, 7.9e10, 0.3, 0}};
-  soil.bin_material = "steel";
-  soil.layers = {{"top", 0, 0.02}, {"deep", 0.02, 0.06}};
+  support::useTopAndDeepLayers(soil, 0.02);
   const double deep_friction = layered ? 0.3 : 0.07, deep_rolling = layered ? 0.2 : 0.02;  // Table 4: layer4 against layer1
   soil.interactions = {{"top", "top", 0.6, 0.07, 0.02, 3e4},
                        {"top", "deep", 0.6, 0.07, 0.02, 3e4},
@@ -45,20 +40,14 @@ study::Study coneStudy(bool layered) {
     study::Tool cone;
     cone.name = "cone" + std::to_string(c + 1);
     cone.dem_material = "steel";
-    cone.geometry.kind = study::GeometryKind::Cone;
-    cone.geometry.cone_area_m2 = 5e-4;
-    cone.geometry.cone_angle_rad = std::numbers::pi / 3;
-    cone.geometry.length_m = 0.08;
+    support::usePaperCone(cone, 0.08);
     cone.motion.depth_m = 0.04;
     cone.motion.velocity_m_s = 0.02;
     cone.motion.start_z_m = 0.05 + 0.05 * c;
     cone.motion.center_x_m = 0.04;
     s.tools.push_back(cone);
   }
-  s.fem.dt_s = 0.002;
-  s.dem.criterion = study::TimeStepCriterion::StiffestSpring;
-  s.dem.dt_fraction = 0.1;
-  s.dem.threads = 1;  // two threads of one run waited for each other on a loaded machine
+  support::useBuiltinStep(s, 0.002);
   return s;
 }
 

@@ -4,6 +4,7 @@
 #include "demfem/backends/liggghts/backend.hpp"
 #include "demfem/backends/liggghts/input_deck.hpp"
 #include "small_study.hpp"
+#include "support/study_in_code.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -27,6 +28,17 @@ Vec3 cross(const Vec3& a, const Vec3& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 
+// Backend options with one fixed probe sphere of the soil material, kRadius, centred at `centre` (bin frame).
+liggghts::BackendOptions probeAt(const Vec3& centre) {
+  liggghts::ProbeSphere p;
+  p.centre_m = centre;
+  p.radius_m = kRadius;
+  p.material = "soil";
+  liggghts::BackendOptions options;
+  options.probes = {p};
+  return options;
+}
+
 struct Setup {
   study::Study study = smallStudy();
   Vec3 centre_local{};  // probe centre in the tool's local frame
@@ -37,13 +49,7 @@ struct Setup {
     centre_local = {0.0033, 0.0533, study.tools[0].geometry.thickness_m / 2 + kRadius - kOverlap};
   }
   liggghts::BackendOptions probe() const {
-    liggghts::ProbeSphere p;
-    p.centre_m = {origin[0] + centre_local[0], origin[1] + centre_local[1], origin[2] + centre_local[2]};
-    p.radius_m = kRadius;
-    p.material = "soil";
-    liggghts::BackendOptions options;
-    options.probes = {p};
-    return options;
+    return probeAt({origin[0] + centre_local[0], origin[1] + centre_local[1], origin[2] + centre_local[2]});
   }
   double mass() const { return 2600 * 4.0 / 3.0 * std::numbers::pi * std::pow(kRadius, 3); }
   // LIGGGHTS 3.8 hooke (normal_model_hooke.h), sphere on a wall: R* = R, m* = m, Y* from both materials.
@@ -189,21 +195,13 @@ TEST_CASE("a cone penetrometer pressed on a single sphere gets the hooke force k
   study::Study& s = setup.study;
   s.kind = study::StudyKind::ConePenetration;
   study::Tool& cone = s.tools[0];
-  cone.geometry.kind = study::GeometryKind::Cone;
-  cone.geometry.cone_area_m2 = 5e-4;
-  cone.geometry.cone_angle_rad = std::numbers::pi / 3;
-  cone.geometry.length_m = 0.06;
+  support::usePaperCone(cone, 0.06);
   cone.geometry.keypoint_spacing_m = 0.005;
   cone.motion.stroke_m = 0;
   cone.motion.start_z_m = 0.08;
   const Vec3 tip = liggghts::toolStartOrigin(s, 0);
-  liggghts::ProbeSphere probe;
-  probe.centre_m = {tip[0], tip[1] - (kRadius - kOverlap), tip[2]};  // right below the tip, overlapping it
-  probe.radius_m = kRadius;
-  probe.material = "soil";
-  liggghts::BackendOptions options;
-  options.probes = {probe};
-  auto backend = liggghts::makeBackend(s, options);
+  // Right below the tip, overlapping it.
+  auto backend = liggghts::makeBackend(s, probeAt({tip[0], tip[1] - (kRadius - kOverlap), tip[2]}));
   backend->simulate(backend->info().dem_time_step_s);
   const Vec3 total = sum(backend->nodeForces("tool", adapter::ForceMode::Instantaneous));
   // The tip vertex pushes the sphere down; the sphere pushes the cone up by kn delta.

@@ -3,17 +3,13 @@
 #pragma once
 
 #include "demfem/study/study.hpp"
+#include "support/study_in_code.hpp"
 
 namespace demfem::liggghts::testing {
 
 inline study::Study smallStudy() {
-  study::Study s;
-  s.name = "liggghts-small";
-  s.kind = study::StudyKind::DemOnly;
+  study::Study s = support::binStudy("liggghts-small", study::StudyKind::DemOnly, 0.16, 0.08, 0.04);
   auto& soil = s.soil;
-  soil.bin_length_m = 0.16;
-  soil.bin_width_m = 0.08;
-  soil.fill_height_m = 0.04;
   soil.diameter_min_m = 0.0095;
   soil.diameter_max_m = 0.0105;
   soil.materials = {{"soil", 2600, 5e6, 0.3, 0},
@@ -34,9 +30,7 @@ inline study::Study smallStudy() {
   study::Tool tool;
   tool.name = "tool";
   tool.dem_material = "tool_steel";
-  tool.geometry.length_m = 0.1;
-  tool.geometry.width_m = 0.04;
-  tool.geometry.thickness_m = 0.003;
+  support::usePlate(tool, 0.1, 0.04, 0.003);
   tool.geometry.keypoint_spacing_m = 0.01;
   tool.motion.depth_m = 0.02;
   tool.motion.start_z_m = 0.0;

@@ -23,8 +23,11 @@
 // compare again), SVG plots (unless renderer is null) and report.md, all through StagedOutput:
 // nothing appears under its final name unless everything succeeded.
 //
-// JSON: toJson() gives every reported number with its unit in the key name (`force_mean_N`,
-// `frequency_mean_Hz`); undefined values (e.g. a spread of one repeat) are null.
+// JSON: toJson() gives the settings and, per report table, an array of one object per row keyed by
+// the table's column names, the unit in each (`force_mean_N`, `frequency_mean_Hz`; docs/analysis.md):
+// evaluate's `soil_bin_runs`, `soil_bin_cases`, `calibration_runs` and `calibration_cases`; compare's
+// `means`, `spectra`, `calibration` and `correlations`, with `simulated_tool_matched_as` and
+// `unmatched_cases`. Undefined values (e.g. a spread of one repeat) are null.
 #pragma once
 
 #include "demfem/analysis/evaluation.hpp"

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -37,10 +38,18 @@ int runApp(CLI::App& app, int argc, char** argv);
 // Adds `--json FILE` to `cmd` (FILE "-" = standard output); returns the bound string.
 std::string& addJsonOption(CLI::App& cmd);
 
+// Adds `--no-plots` (sets `no_plots`) and `--gnuplot PROGRAM` (default shown) to a command that
+// draws `plots` (their description, e.g. "SVG and PNG plots").
+void addPlotOptions(CLI::App& cmd, bool& no_plots, std::string& gnuplot, const std::string& plots);
+
 // False when `--json -` claimed standard output: then the command prints nothing else there.
 inline bool textOnStdout(const std::string& json_target) { return json_target != "-"; }
 
 // Writes `doc` to `target` ("-" = stdout) atomically (temp file + rename). No-op if target empty.
 void writeJson(const std::string& target, const nlohmann::json& doc);
+
+// The JSON document in `file`, keys in file order. Throws InputError naming the file when it cannot
+// be read or is not JSON (with the parser's message).
+nlohmann::ordered_json readJsonFile(const std::filesystem::path& file);
 
 }  // namespace demfem::cli
