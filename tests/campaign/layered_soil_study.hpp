@@ -18,15 +18,18 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <optional>
 
 namespace demfem::campaign::test {
 
 // Window mean of the draught over the seeds (the same seeds 1..n on both engines): mean and sample
-// standard deviation.
+// standard deviation of the seeds whose run gave a draught, and how many runs failed (a DEM
+// blow-up or the overlap guard: no draught, left out of the mean).
 struct SeedMean {
   double mean_N = 0, sd_N = 0;
+  int failed_runs = 0;
 };
 
 struct DepthFigures {
@@ -43,6 +46,28 @@ struct LayeredSoilOutcome {
   std::optional<Diagnosis> diagnosis;
   double diagnosis_wall_s = 0;
 };
+
+// The soil test cases' shared caches in the build directory: settled soils ($DEMFEM_SOIL_DIR, set
+// here) and model runs (the returned run-cache directory; RunCache keys a run by study, deposition
+// seed and case), so the calibration and both diagnoses of one build reuse each other's depositions
+// and runs, also from concurrent test processes (both caches write by rename). The directory is
+// named after the test executable's size and modification time: a rebuilt model never reads the
+// runs of the previous build, whose directories are removed. Throws std::runtime_error when the
+// variable cannot be set.
+inline std::filesystem::path sharedSoilCache() {
+  namespace fs = std::filesystem;
+  const fs::path exe = fs::read_symlink("/proc/self/exe");
+  const auto stamp = static_cast<unsigned long long>(fs::last_write_time(exe).time_since_epoch().count());
+  const fs::path root = fs::path(DEMFEM_BINARY_DIR) / "tests/campaign/soil-cache";
+  const fs::path dir = root / (exe.filename().string() + "-" + std::to_string(fs::file_size(exe)) + "-" + std::to_string(stamp));
+  std::error_code ignored;
+  if (fs::is_directory(root))
+    for (const auto& entry : fs::directory_iterator(root))
+      if (entry.path() != dir && entry.path().filename().string().starts_with(exe.filename().string() + "-")) fs::remove_all(entry.path(), ignored);
+  fs::create_directories(dir / "soil");
+  if (::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1) != 0) throw std::runtime_error("cannot set DEMFEM_SOIL_DIR to " + (dir / "soil").string());
+  return dir / "runs";
+}
 
 inline std::filesystem::path fixtureData(const std::string& name) {
   return std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data" / name;
@@ -83,17 +108,18 @@ inline SeedMean seedMean(const std::vector<double>& values) {
 inline std::map<double, SeedMean> predictSeeds(const nlohmann::ordered_json& study, const std::string& origin,
                                                const std::vector<analysis::Recording>& recordings, Model& model,
                                                const CalibrationOptions& options, int seeds) {
-  std::map<double, std::vector<double>> values;
+  std::map<double, std::vector<double>> values, failed;  // failed: one entry per recording of a failed run
   for (int seed = 1; seed <= seeds; ++seed) {
     nlohmann::ordered_json s = study;
     s["soil"]["deposition"]["seed"] = seed;
     CalibrationOptions one_seed = options;  // the fits' runs at these seeds come from the run cache
     one_seed.model_seeds = 1;
     for (const auto& r : predict(s, origin, recordings, model, one_seed))
-      if (r.quantity == "window_mean_force_N") values[r.key.depth_mm].push_back(r.simulated);
+      if (r.quantity == "window_mean_force_N") (r.missing ? failed[r.key.depth_mm] : values[r.key.depth_mm]).push_back(r.simulated);
   }
   std::map<double, SeedMean> out;
   for (const auto& [depth, v] : values) out[depth] = seedMean(v);
+  for (const auto& [depth, f] : failed) out[depth].failed_runs = static_cast<int>(f.size());
   return out;
 }
 
