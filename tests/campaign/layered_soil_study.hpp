@@ -52,7 +52,8 @@ struct LayeredSoilOutcome {
 // seed and case), so the calibration and both diagnoses of one build reuse each other's depositions
 // and runs, also from concurrent test processes (both caches write by rename). The directory is
 // named after the test executable's size and modification time: a rebuilt model never reads the
-// runs of the previous build, whose directories are removed. Throws std::runtime_error when the
+// runs of the previous build; directories of earlier builds made more than a day ago are removed (a test
+// of an earlier build may still be running in a younger one). Throws std::runtime_error when the
 // variable cannot be set.
 inline std::filesystem::path sharedSoilCache() {
   namespace fs = std::filesystem;
@@ -61,9 +62,12 @@ inline std::filesystem::path sharedSoilCache() {
   const fs::path root = fs::path(DEMFEM_BINARY_DIR) / "tests/campaign/soil-cache";
   const fs::path dir = root / (exe.filename().string() + "-" + std::to_string(fs::file_size(exe)) + "-" + std::to_string(stamp));
   std::error_code ignored;
+  const auto day_ago = fs::file_time_type::clock::now() - std::chrono::hours(24);
   if (fs::is_directory(root))
     for (const auto& entry : fs::directory_iterator(root))
-      if (entry.path() != dir && entry.path().filename().string().starts_with(exe.filename().string() + "-")) fs::remove_all(entry.path(), ignored);
+      if (entry.path() != dir && entry.path().filename().string().starts_with(exe.filename().string() + "-") &&
+          fs::last_write_time(entry.path(), ignored) < day_ago)
+        fs::remove_all(entry.path(), ignored);
   fs::create_directories(dir / "soil");
   if (::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1) != 0) throw std::runtime_error("cannot set DEMFEM_SOIL_DIR to " + (dir / "soil").string());
   return dir / "runs";
