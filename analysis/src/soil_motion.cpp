@@ -2,9 +2,13 @@
 
 #include "demfem/analysis/recording.hpp"
 #include "demfem/vtkio/vtk_files.hpp"
+#include "soil_motion_median.hpp"
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <map>
 
@@ -76,6 +80,22 @@ fs::path toolCollection(const fs::path& vtk_dir, std::string& tool) {
   return vtk_dir / ("dem-" + tool + ".pvd");
 }
 
+// A run marked incomplete by its sidecar (DIR/sensors.json, "complete": false) is refused: its
+// particle files stop where the run failed. No sidecar (particle tracks from elsewhere): nothing to check.
+void refuseIncompleteRun(const fs::path& run_dir) {
+  const fs::path sidecar = run_dir / "sensors.json";
+  if (!fs::exists(sidecar)) return;
+  std::ifstream in(sidecar);
+  const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) throw InputError(sidecar.string() + ": not a JSON object");
+  if (!doc.contains("complete") || !doc["complete"].is_boolean()) throw InputError(sidecar.string() + ": /complete: missing or not true/false");
+  if (!doc["complete"].get<bool>())
+    throw InputError(sidecar.string() + ": /complete: the run is marked incomplete (complete: false" +
+                     (doc.contains("incomplete_reason") && doc["incomplete_reason"].is_string() ? ", " + doc["incomplete_reason"].get<std::string>()
+                                                                                               : std::string()) +
+                     "): its particle files stop where it failed");
+}
+
 }  // namespace
 
 double ParticleFrame::speed(std::size_t i) const {
@@ -116,24 +136,103 @@ std::size_t cellOf(const SectionMap& map, const double* p, int u_axis, int v_axi
 
 }  // namespace
 
-SectionMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m) {
+namespace {
+
+struct SectionAxes {
+  int normal, u, v;  // frame components: the plane's normal, the map's u and v axes
+};
+
+SectionAxes axesOf(Axis axis) {
+  switch (axis) {
+    case Axis::X: return {0, 2, 1};
+    case Axis::Y: return {1, 2, 0};
+  }
+  throw InputError("section: unknown axis");
+}
+
+// The empty map of a section (velocitySection()'s plane, thickness and cells).
+SectionMap sectionGrid(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m) {
   if (!(half_thickness_m > 0)) throw InputError("velocity section: the half thickness must be > 0");
-  const int normal = axis == Axis::X ? 0 : 1, u_axis = 2, v_axis = axis == Axis::X ? 1 : 0;
-  SectionMap map = emptyMap(frame, axis, u_axis, v_axis, cell_m);
+  const SectionAxes a = axesOf(axis);
+  SectionMap map = emptyMap(frame, axis, a.u, a.v, cell_m);
   map.position_m = position_m;
   map.half_thickness_m = half_thickness_m;
-  std::vector<double> sum(map.values.size(), 0.0);
-  std::vector<std::size_t> count(sum.size(), 0);
+  return map;
+}
+
+// visit(particle, cell) for every particle centred within the section's half thickness of its plane.
+template <class Visit>
+void forEachOnSection(const ParticleFrame& frame, const SectionMap& map, Visit&& visit) {
+  const SectionAxes a = axesOf(map.axis);
   for (std::size_t i = 0; i < frame.size(); ++i) {
     const double* p = &frame.position_m[3 * i];
-    if (std::fabs(p[normal] - position_m) > half_thickness_m) continue;
-    const std::size_t k = cellOf(map, p, u_axis, v_axis);
+    if (std::fabs(p[a.normal] - map.position_m) <= map.half_thickness_m) visit(i, cellOf(map, p, a.u, a.v));
+  }
+}
+
+}  // namespace
+
+SectionMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m) {
+  SectionMap map = sectionGrid(frame, axis, position_m, half_thickness_m, cell_m);
+  std::vector<double> sum(map.values.size(), 0.0);
+  std::vector<std::size_t> count(sum.size(), 0);
+  forEachOnSection(frame, map, [&](std::size_t i, std::size_t k) {
     sum[k] += frame.speed(i);
     ++count[k];
-  }
+  });
   for (std::size_t k = 0; k < sum.size(); ++k)
     if (count[k]) map.values[k] = sum[k] / static_cast<double>(count[k]);
   return map;
+}
+
+FlowSection flowSection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m,
+                        double threshold_m_s) {
+  if (!(threshold_m_s >= 0)) throw InputError("flow section: the speed threshold must be >= 0");
+  FlowSection flow;
+  flow.threshold_m_s = threshold_m_s;
+  flow.velocity_u = sectionGrid(frame, axis, position_m, half_thickness_m, cell_m);
+  flow.velocity_v = flow.alignment = flow.velocity_u;
+  const std::size_t cells = flow.velocity_u.values.size();
+  const SectionAxes a = axesOf(axis);
+  std::vector<double> su(cells, 0.0), sv(cells, 0.0);
+  std::vector<std::size_t> count(cells, 0);
+  std::vector<std::array<double, 3>> unit(cells, {0.0, 0.0, 0.0});
+  flow.moving.assign(cells, 0);
+  forEachOnSection(frame, flow.velocity_u, [&](std::size_t i, std::size_t k) {
+    const double* v = &frame.velocity_m_s[3 * i];
+    su[k] += v[a.u];
+    sv[k] += v[a.v];
+    ++count[k];
+    const double speed = frame.speed(i);
+    if (!(speed > threshold_m_s)) return;
+    for (int c = 0; c < 3; ++c) unit[k][c] += v[c] / speed;
+    ++flow.moving[k];
+  });
+  for (std::size_t k = 0; k < cells; ++k) {
+    if (count[k]) {
+      flow.velocity_u.values[k] = su[k] / static_cast<double>(count[k]);
+      flow.velocity_v.values[k] = sv[k] / static_cast<double>(count[k]);
+    }
+    if (flow.moving[k] >= 2) flow.alignment.values[k] = std::hypot(unit[k][0], unit[k][1], unit[k][2]) / static_cast<double>(flow.moving[k]);
+  }
+  return flow;
+}
+
+AlignmentOrder alignmentOrder(const FlowSection& flow) {
+  AlignmentOrder o;
+  double order = 0, baseline = 0;
+  for (std::size_t k = 0; k < flow.moving.size(); ++k) {
+    const double n = static_cast<double>(flow.moving[k]);
+    if (flow.moving[k] < 2) continue;
+    ++o.cells;
+    o.particles += flow.moving[k];
+    order += n * flow.alignment.values[k];
+    baseline += n / std::sqrt(n);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  o.order = o.cells ? order / static_cast<double>(o.particles) : nan;
+  o.random_baseline = o.cells ? baseline / static_cast<double>(o.particles) : nan;
+  return o;
 }
 
 SectionMap mixingSection(const ParticleFrame& frame, double cell_m) {
@@ -181,8 +280,7 @@ SpeedRange frontVelocityRange(const ParticleFrame& frame, const Box& box) {
   std::sort(speeds.begin(), speeds.end());
   r.min_m_s = speeds.front();
   r.max_m_s = speeds.back();
-  const std::size_t m = speeds.size() / 2;
-  r.median_m_s = speeds.size() % 2 ? speeds[m] : 0.5 * (speeds[m - 1] + speeds[m]);
+  r.median_m_s = medianOfSorted(speeds);
   return r;
 }
 
@@ -247,6 +345,7 @@ RunFrames loadRun(const fs::path& run_dir, const std::string& tool) {
   RunFrames run;
   run.directory = run_dir;
   run.tool = tool;
+  refuseIncompleteRun(run_dir);
   const fs::path vtk_dir = run_dir / "vtk";
   const auto particles = collection(vtk_dir / "particles.pvd");
   const auto tools = collection(toolCollection(vtk_dir, run.tool));

@@ -46,6 +46,10 @@ SoilMotionInstant instantOf(const RunFrames& run, std::size_t k, const ParticleF
   const Box front{{in.tool.lo[0], in.tool.lo[1], in.tool.hi[2]}, {in.tool.hi[0], r.surface_y_m, in.tool.hi[2] + s.front_reach_m}};
   in.front = frontVelocityRange(frame, front);
   in.mixing = mixingIndex(frame, s.mixing_cell_m, r.boundaries_y_m);
+  in.flow = flowSection(frame, Axis::X, mid_x, s.half_thickness_m, s.flow_cell_m, s.threshold_m_s);
+  in.order = alignmentOrder(in.flow);
+  in.streamlines = traceStreamlines(in.flow, s.streamlines);
+  in.streamline_statistics = streamlineStatistics(in.streamlines);
   return in;
 }
 
@@ -70,6 +74,16 @@ MapPanel mapPanel(const SectionMap& m, const std::string& title, const std::stri
   for (const double v : m.values) p.values.push_back(v * value_scale);
   return p;
 }
+
+std::vector<double> millimetres(const std::vector<double>& metres) {
+  std::vector<double> out;
+  for (const double m : metres) out.push_back(m * 1e3);
+  return out;
+}
+
+// A value in mm (or mm-based units) for JSON: null when it is not defined (NaN).
+json jsonMm(double metres) { return std::isfinite(metres) ? json(metres * 1e3) : json(nullptr); }
+json jsonValue(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
 std::string mm(double metres) {
   std::ostringstream out;
@@ -96,6 +110,10 @@ Figure sectionsFigure(const std::vector<SoilMotionRun>& runs, bool vertical) {
       if (in.extent.count)
         p.overlays.push_back(outline("moving > threshold", in.extent.region.lo[2] * 1e3, in.extent.region.hi[2] * 1e3,
                                      in.extent.region.lo[v] * 1e3, in.extent.region.hi[v] * 1e3, "#000000"));
+      if (vertical)
+        for (std::size_t l = 0; l < in.streamlines.size(); ++l)
+          p.overlays.push_back({l == 0 ? "streamlines" : "", millimetres(in.streamlines[l].u_m), millimetres(in.streamlines[l].v_m), "#303030",
+                                SeriesStyle::Line, 0.8, {}});
       p.overlays.push_back(outline("tool", in.tool.lo[2] * 1e3, in.tool.hi[2] * 1e3, in.tool.lo[v] * 1e3,
                                    std::min(in.tool.hi[v], vertical ? r.surface_y_m : in.tool.hi[v]) * 1e3, "#ffffff"));
       f.panels.push_back(p);
@@ -143,7 +161,9 @@ SoilMotionRun analyseRun(const std::filesystem::path& run_dir, const SoilMotionS
 
 json soilMotionJson(const std::vector<SoilMotionRun>& runs, const SoilMotionSettings& s) {
   json out{{"threshold_mm_s", s.threshold_m_s * 1e3}, {"cell_mm", s.cell_m * 1e3}, {"mixing_cell_mm", s.mixing_cell_m * 1e3},
-           {"runs", json::array()}};
+           {"flow_cell_mm", s.flow_cell_m * 1e3}, {"streamline_step_mm", s.streamlines.step_fraction * s.flow_cell_m * 1e3},
+           {"streamline_max_step_turn_deg", s.streamlines.max_step_turn_rad * 180 / M_PI},
+           {"streamline_max_total_turn_deg", s.streamlines.max_total_turn_rad * 180 / M_PI}, {"runs", json::array()}};
   for (const auto& r : runs) {
     json run{{"run", r.name}, {"tool", r.tool}, {"surface_mm", r.surface_y_m * 1e3}, {"mixing_before", r.mixing_before},
              {"mixing_after", r.mixing_after}, {"instants", json::array()}};
@@ -158,7 +178,14 @@ json soilMotionJson(const std::vector<SoilMotionRun>& runs, const SoilMotionSett
                                  {"front_speed_median_mm_s", in.front.median_m_s * 1e3},
                                  {"front_speed_max_mm_s", in.front.max_m_s * 1e3},
                                  {"front_particles", in.front.count},
-                                 {"mixing", in.mixing}});
+                                 {"mixing", in.mixing},
+                                 {"streamline_order", jsonValue(in.order.order)},
+                                 {"streamline_order_random_baseline", jsonValue(in.order.random_baseline)},
+                                 {"streamline_order_cells", in.order.cells},
+                                 {"streamlines", in.streamline_statistics.count},
+                                 {"mean_streamline_length_mm", jsonMm(in.streamline_statistics.mean_length_m)},
+                                 {"median_streamline_length_mm", jsonMm(in.streamline_statistics.median_length_m)},
+                                 {"streamline_curvature_rad_per_mm", jsonValue(in.streamline_statistics.curvature_rad_per_m * 1e-3)}});
     out["runs"].push_back(run);
   }
   return out;
@@ -181,6 +208,30 @@ std::string soilMotionMarkdown(const std::vector<SoilMotionRun>& runs, const Soi
          << ", " << in.front.count << " particles) | " << std::setprecision(3) << in.mixing << " |\n";
     md << "| " << r.name << " | after (last frame) | | | | | " << std::setprecision(3) << r.mixing_after << " |\n";
   }
+  md << "\nStreamline order on the vertical section through the tool (Fig. 16c: organised, long streamlines against short, "
+        "irregular ones), in cells of "
+     << mm(s.flow_cell_m) << " mm: alignment = length of the mean unit velocity vector of the moving particles of a cell, weighted by "
+        "them (1 organised; independent random directions give about 1/sqrt(n), the baseline); streamlines through every cell in motion "
+        "(RK2, steps of "
+     << mm(s.streamlines.step_fraction * s.flow_cell_m) << " mm, ended on leaving the region, below the threshold, at a turn above "
+     << s.streamlines.max_step_turn_rad * 180 / M_PI << " degrees per step or after " << s.streamlines.max_total_turn_rad * 180 / M_PI
+     << " degrees in all).\n\n"
+        "| run | displacement (mm) | alignment order (random baseline, cells) | streamlines | mean length (mm) | median length (mm) | "
+        "curvature (rad/mm) |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& r : runs)
+    for (const auto& in : r.instants) {
+      const auto& st = in.streamline_statistics;
+      md << "| " << r.name << " | " << mm(in.displacement_m) << " | ";
+      if (in.order.cells)
+        md << std::setprecision(3) << in.order.order << " (" << in.order.random_baseline << ", " << in.order.cells << ")";
+      else
+        md << "none (no cell with 2 moving particles)";
+      if (st.count)
+        md << " | " << st.count << " | " << mm(st.mean_length_m) << " | " << mm(st.median_length_m) << " | " << std::setprecision(3)
+           << st.curvature_rad_per_m * 1e-3 << " |\n";
+      else
+        md << " | none (nothing in motion) | | | |\n";
+    }
   md << "\n![vertical sections](plots/velocity-sections.svg)\n\n![horizontal sections](plots/horizontal-sections.svg)\n\n"
         "![layer mixing](plots/mixing.svg)\n";
   return md.str();

@@ -9,6 +9,7 @@
 
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 namespace demfem::cli {
 
@@ -17,14 +18,14 @@ namespace {
 struct SoilMotionOptions {
   std::vector<std::string> runs;
   std::vector<double> at_mm{42.0};
-  double threshold_mm_s = 5.0, cell_mm = 10.0, front_reach_mm = 10.5, mixing_cell_mm = 20.0;
+  double threshold_mm_s = 5.0, cell_mm = 10.0, front_reach_mm = 10.5, mixing_cell_mm = 20.0, flow_cell_mm = 20.0;
   std::string tool, out_dir = "out/soil-motion", gnuplot = "gnuplot";
   bool no_plots = false;
 };
 
 analysis::SoilMotionSettings settingsOf(const SoilMotionOptions& o) {
-  for (const double v : {o.threshold_mm_s, o.cell_mm, o.front_reach_mm, o.mixing_cell_mm})
-    if (!(v > 0)) throw InputError("--threshold-mm-s, --cell-mm, --front-reach-mm and --mixing-cell-mm must be > 0");
+  for (const double v : {o.threshold_mm_s, o.cell_mm, o.front_reach_mm, o.mixing_cell_mm, o.flow_cell_mm})
+    if (!(v > 0)) throw InputError("--threshold-mm-s, --cell-mm, --front-reach-mm, --mixing-cell-mm and --flow-cell-mm must be > 0");
   analysis::SoilMotionSettings s;
   for (const double d : o.at_mm) s.displacements_m.push_back(d * 1e-3);
   s.threshold_m_s = o.threshold_mm_s * 1e-3;
@@ -32,8 +33,23 @@ analysis::SoilMotionSettings settingsOf(const SoilMotionOptions& o) {
   s.half_thickness_m = 0.5 * s.cell_m;
   s.front_reach_m = o.front_reach_mm * 1e-3;
   s.mixing_cell_m = o.mixing_cell_mm * 1e-3;
+  s.flow_cell_m = o.flow_cell_mm * 1e-3;
   s.tool = o.tool;
   return s;
+}
+
+std::string streamlineSummary(const analysis::SoilMotionInstant& in) {
+  std::ostringstream out;
+  if (in.order.cells)
+    out << "alignment order " << in.order.order << " (random " << in.order.random_baseline << ")";
+  else
+    out << "no alignment order (no cell with 2 moving particles)";
+  if (in.streamline_statistics.count)
+    out << ", " << in.streamline_statistics.count << " streamlines of mean length " << in.streamline_statistics.mean_length_m * 1e3
+        << " mm";
+  else
+    out << ", no streamline (nothing in motion)";
+  return out.str();
 }
 
 void printRuns(const std::vector<analysis::SoilMotionRun>& runs, const std::filesystem::path& dir) {
@@ -42,7 +58,8 @@ void printRuns(const std::vector<analysis::SoilMotionRun>& runs, const std::file
     for (const auto& in : r.instants)
       std::cout << "  at " << in.displacement_m * 1e3 << " mm: moving region " << in.extent.depth_m * 1e3 << " mm deep, "
                 << in.extent.length_m * 1e3 << " mm long, " << in.extent.width_m * 1e3 << " mm wide; in front of the tool "
-                << in.front.min_m_s * 1e3 << " - " << in.front.max_m_s * 1e3 << " mm/s (" << in.front.count << " particles)\n";
+                << in.front.min_m_s * 1e3 << " - " << in.front.max_m_s * 1e3 << " mm/s (" << in.front.count << " particles); "
+                << streamlineSummary(in) << "\n";
   }
   std::cout << "report: " << (dir / "soil-motion.md").string() << "\n";
 }
@@ -52,7 +69,7 @@ void printRuns(const std::vector<analysis::SoilMotionRun>& runs, const std::file
 void addSoilMotionCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("soil-motion",
                                  "Soil motion of runs from their particle files (Section 3.5, Fig. 16): velocity sections as maps, the "
-                                 "extent of the region in motion, speeds in front of the tool, layer mixing before and after; several "
+                                 "extent of the region in motion, speeds in front of the tool, streamline order, layer mixing before and after; several "
                                  "runs side by side. Writes soil-motion.json, soil-motion.md and plots/.");
   auto o = std::make_shared<SoilMotionOptions>();
   cmd->add_option("RUN_DIR", o->runs, "Run output directories (with vtk/particles.pvd)")->required()->check(CLI::ExistingDirectory);
@@ -62,6 +79,8 @@ void addSoilMotionCommand(CLI::App& app) {
   cmd->add_option("--front-reach-mm", o->front_reach_mm, "How far ahead of the front face 'in front of the tool' reaches (mm)")
       ->capture_default_str();
   cmd->add_option("--mixing-cell-mm", o->mixing_cell_mm, "Cell size of the layer-mixing measure (mm)")->capture_default_str();
+  cmd->add_option("--flow-cell-mm", o->flow_cell_mm, "Cell size of the streamline-order flow section on the vertical section (mm)")
+      ->capture_default_str();
   cmd->add_option("--tool", o->tool, "Tool whose motion is analysed (default: the run's only tool)");
   cmd->add_option("--out", o->out_dir, "Output directory")->capture_default_str();
   cmd->add_flag("--no-plots", o->no_plots, "Do not draw plots");

@@ -1,11 +1,14 @@
 // Soil-motion measures on synthetic particle fields whose answers are known exactly.
 #include "demfem/analysis/recording.hpp"
 #include "demfem/analysis/soil_motion.hpp"
+#include "demfem/analysis/soil_motion_report.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 using namespace demfem::analysis;
@@ -88,4 +91,165 @@ TEST_CASE("mixing is 0 for untouched layers and reaches its maximum for a random
   const double random = mixingIndex(shuffled, 0.04, boundaries);
   CHECK(random > 0.9);  // 4800 particles, about 50 per cell: the finite-sample entropy deficit is a few %
   CHECK(random <= 1.0);
+}
+
+namespace {
+
+// A lattice of nx x ny x nz particles on a section through its middle x column (cells of 2 spacings:
+// 4 particles per cell on the plane x = 5 mm) moving with velocity(z, y) = (v_z, v_y).
+template <class Velocity>
+FlowSection latticeFlow(int ny, int nz, Velocity&& velocity, double threshold_m_s = 0.005) {
+  ParticleFrame f = lattice(1, ny, nz, 1);
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const auto [vz, vy] = velocity(f.position_m[3 * i + 2], f.position_m[3 * i + 1]);
+    f.velocity_m_s[3 * i + 1] = vy;
+    f.velocity_m_s[3 * i + 2] = vz;
+  }
+  return flowSection(f, Axis::X, 0.005, 0.006, 2 * kD, threshold_m_s);
+}
+
+}  // namespace
+
+TEST_CASE("a uniform flow is fully ordered and its streamlines span the region along the flow", "[analysis]") {
+  const auto flow = latticeFlow(6, 20, [](double, double) { return std::pair{0.03, 0.0}; });  // 10 x 3 cells, 200 x 60 mm
+  const auto order = alignmentOrder(flow);
+  CHECK(order.cells == 30u);
+  CHECK(order.particles == 120u);
+  CHECK(order.order == Approx(1.0).epsilon(1e-12));
+  CHECK(order.random_baseline == Approx(0.5).epsilon(1e-12));  // 1/sqrt(4)
+
+  const auto lines = traceStreamlines(flow, StreamlineRules{});
+  REQUIRE(lines.size() == 30u);
+  // Cell-centre seeds from z = 5 mm (the lowest centre): the region spans z 5 to 205 mm, 200 mm.
+  for (const auto& l : lines) {
+    CHECK(l.length_m == Approx(0.200).margin(1e-9));
+    CHECK(l.turning_rad == Approx(0).margin(1e-12));
+    CHECK(l.u_m.front() == Approx(0.005).margin(1e-9));
+  }
+  const auto s = streamlineStatistics(lines);
+  CHECK(s.count == 30u);
+  CHECK(s.mean_length_m == Approx(0.200).margin(1e-9));
+  CHECK(s.median_length_m == Approx(0.200).margin(1e-9));
+  CHECK(s.curvature_rad_per_m == Approx(0).margin(1e-9));
+
+  // Along the diagonal of a 200 x 60 mm region the line through a centre ends on its edges.
+  const auto diagonal = latticeFlow(6, 20, [](double, double) { return std::pair{0.03, 0.03}; });
+  for (const auto& l : traceStreamlines(diagonal, StreamlineRules{}))
+    CHECK(l.length_m <= std::sqrt(2.0) * 0.060 + 1e-9);
+}
+
+TEST_CASE("streamlines of a rigid rotation are circles of their seed radius with curvature 1/r", "[analysis]") {
+  // omega = 1 rad/s about the cell centre (z, y) = (215, 215) mm of a 400 x 400 mm lattice (cells of
+  // 20 mm from the lowest centre at 5 mm): v = omega x r. A cell's particles sit at its centre minus
+  // half a spacing (centres 5 and 15 mm in the cell 5-25 mm), so the field is given at the particle
+  // plus half a spacing: the cell means are then the rotation at the cell centres.
+  constexpr double c = 0.215, half = kD / 2;
+  const auto flow = latticeFlow(40, 40, [](double z, double y) { return std::pair{-(y + half - c), z + half - c}; });
+  const StreamlineRules rules;  // step 5 mm, one full turn at most
+  const auto lines = traceStreamlines(flow, rules);
+  // The cell centre (155, 215) mm sits at r = 60 mm: its line closes on itself after one turn.
+  const auto line = std::find_if(lines.begin(), lines.end(), [](const Streamline& l) {
+    return std::fabs(l.seed_u_m - 0.155) < 1e-9 && std::fabs(l.seed_v_m - 0.215) < 1e-9;
+  });
+  REQUIRE(line != lines.end());
+  const double r = 0.060, h = rules.step_fraction * 0.02;
+  // Bounded by the one-turn rule: n steps turn n - 1 times by h / r, so within one step of 2 pi r.
+  CHECK(line->length_m == Approx(2 * M_PI * r).margin(h));
+  CHECK(line->turning_rad <= 2 * M_PI + 1e-12);
+  CHECK(line->turning_rad > 2 * M_PI - 1.01 * h / r);
+  for (std::size_t k = 0; k < line->u_m.size(); ++k)      // the midpoint rule drifts by O(h^2 / r) per turn
+    CHECK(std::hypot(line->u_m[k] - c, line->v_m[k] - c) == Approx(r).epsilon(0.005));
+  CHECK(line->turning_rad / line->length_m == Approx(1 / r).epsilon(0.02));
+
+  // A tighter turn than the per-step rule allows: steps of a whole cell (20 mm) at r = 20 mm turn by
+  // h / r = 1 rad > 30 degrees, so the lines there end at their first turn, after one step.
+  StreamlineRules coarse;
+  coarse.step_fraction = 1;
+  const auto coarse_lines = traceStreamlines(flow, coarse);
+  const auto near = std::find_if(coarse_lines.begin(), coarse_lines.end(), [](const Streamline& l) {
+    return std::fabs(l.seed_u_m - 0.195) < 1e-9 && std::fabs(l.seed_v_m - 0.215) < 1e-9;
+  });
+  REQUIRE(near != coarse_lines.end());
+  CHECK(near->length_m == Approx(0.02).margin(1e-12));
+  CHECK(near->turning_rad == 0.0);
+}
+
+TEST_CASE("random directions give an alignment order near 1/sqrt(n)", "[analysis]") {
+  // 8 moving particles per cell (two x columns, 2 x 2 per column), 25 x 20 cells, 3-D directions
+  // uniform on the sphere at 20 mm/s. For large n the mean |mean unit vector| is sqrt(8 / (3 pi n))
+  // = 0.921 / sqrt(n) (Maxwell distribution of a 3-D random walk; its rms is exactly 1/sqrt(n)); the
+  // 500-cell mean scatters by about 0.02 / sqrt(n): the band 0.85 - 0.99 / sqrt(n) is > 3 sigma wide.
+  ParticleFrame f = lattice(2, 40, 50, 1);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const double x = gauss(rng), y = gauss(rng), z = gauss(rng), n = std::sqrt(x * x + y * y + z * z);
+    for (int c = 0; c < 3; ++c) f.velocity_m_s[3 * i + c] = 0.02 * std::array{x, y, z}[c] / n;
+  }
+  const auto order = alignmentOrder(flowSection(f, Axis::X, 0.010, 0.006, 2 * kD, 0.005));
+  REQUIRE(order.cells == 500u);
+  CHECK(order.particles == 4000u);
+  CHECK(order.random_baseline == Approx(1 / std::sqrt(8.0)).epsilon(1e-12));
+  CHECK(order.order > 0.85 / std::sqrt(8.0));
+  CHECK(order.order < 0.99 / std::sqrt(8.0));
+}
+
+TEST_CASE("a flow below the threshold has no streamlines and no order, reported as none", "[analysis]") {
+  const auto flow = latticeFlow(6, 20, [](double, double) { return std::pair{0.003, 0.0}; });  // 3 mm/s < 5 mm/s
+  CHECK(alignmentOrder(flow).cells == 0u);
+  CHECK(std::isnan(alignmentOrder(flow).order));
+  const auto lines = traceStreamlines(flow, StreamlineRules{});
+  CHECK(lines.empty());
+  const auto s = streamlineStatistics(lines);
+  CHECK(s.count == 0u);
+  CHECK(std::isnan(s.mean_length_m));
+  CHECK(std::isnan(s.median_length_m));
+  CHECK(std::isnan(s.curvature_rad_per_m));
+}
+
+TEST_CASE("flow sections and streamlines refuse an empty frame, a cell <= 0 and bad tracing rules", "[analysis]") {
+  const ParticleFrame empty;
+  CHECK_THROWS_WITH(flowSection(empty, Axis::X, 0, 0.005, 0.01, 0.005), Catch::Contains("no particles"));
+  const ParticleFrame f = lattice(2, 2, 2, 1);
+  CHECK_THROWS_WITH(flowSection(f, Axis::X, 0, 0.005, 0.0, 0.005), Catch::Contains("cell size must be > 0"));
+  CHECK_THROWS_WITH(flowSection(f, Axis::X, 0, 0.005, -0.01, 0.005), Catch::Contains("cell size must be > 0"));
+  CHECK_THROWS_WITH(flowSection(f, Axis::X, 0, 0.005, 0.01, -1), Catch::Contains("threshold"));
+  const auto flow = flowSection(f, Axis::X, 0.005, 0.006, 0.01, 0.005);
+  StreamlineRules zero_step;
+  zero_step.step_fraction = 0;
+  CHECK_THROWS_WITH(traceStreamlines(flow, zero_step), Catch::Contains("step fraction"));
+  StreamlineRules no_turn;
+  no_turn.max_step_turn_rad = 0;
+  CHECK_THROWS_WITH(traceStreamlines(flow, no_turn), Catch::Contains("turning limits"));
+}
+
+TEST_CASE("the soil-motion JSON reports a still section's streamline order and lengths as null, not zero", "[analysis]") {
+  SoilMotionRun still;
+  still.name = "still";
+  SoilMotionInstant in;
+  in.flow = latticeFlow(6, 20, [](double, double) { return std::pair{0.003, 0.0}; });
+  in.order = alignmentOrder(in.flow);
+  in.streamlines = traceStreamlines(in.flow, StreamlineRules{});
+  in.streamline_statistics = streamlineStatistics(in.streamlines);
+  still.instants.push_back(in);
+  const SoilMotionSettings settings;
+  const auto doc = soilMotionJson({still}, settings);
+  const auto& j = doc["runs"][0]["instants"][0];
+  CHECK(j["streamlines"] == 0);
+  CHECK(j["streamline_order_cells"] == 0);
+  for (const char* key : {"streamline_order", "streamline_order_random_baseline", "mean_streamline_length_mm", "median_streamline_length_mm",
+                          "streamline_curvature_rad_per_mm"})
+    CHECK(j[key].is_null());
+  CHECK(doc["streamline_step_mm"].get<double>() == Approx(5.0));
+  CHECK(soilMotionMarkdown({still}, settings).find("none (nothing in motion)") != std::string::npos);
+}
+
+TEST_CASE("a run marked incomplete by its sensors.json is refused naming the file", "[analysis]") {
+  const auto dir = std::filesystem::temp_directory_path() / "demfem-soil-motion-incomplete";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "sensors.json") << R"({"complete": false, "incomplete_reason": "DEM blew up"})";
+  CHECK_THROWS_WITH(loadRun(dir), Catch::Contains("sensors.json: /complete: the run is marked incomplete") && Catch::Contains("DEM blew up"));
+  std::ofstream(dir / "sensors.json") << R"({"complete": true})";
+  CHECK_THROWS_WITH(loadRun(dir), Catch::Contains("particles.pvd"));  // complete: on to the particle files, absent here
+  std::filesystem::remove_all(dir);
 }

@@ -4,6 +4,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 using namespace demfem::testing;
 
 namespace {
@@ -153,6 +155,28 @@ TEST_CASE("demfem soil-motion analyses the ParaView files of a coupled run", "[a
   CHECK(r["instants"][1]["displacement_mm"].get<double>() == Approx(10).margin(2));
   CHECK(r["instants"][1]["moving_particles"].get<int>() > 0);      // the tool is dragging soil at 10 mm
   CHECK(r["instants"][1]["front_speed_max_mm_s"].get<double>() > 5);
+  // Streamline order: the key exists at every instant; where something moves, an alignment between
+  // the random baseline's order of magnitude and 1, and streamlines no longer than the bin (80 mm
+  // along, 50 mm of soil: one loop at most, a few times the diagonal).
+  CHECK(doc["flow_cell_mm"].get<double>() == Approx(20));
+  for (const auto& in : r["instants"]) {
+    REQUIRE(in.contains("streamline_order"));
+    REQUIRE(in.contains("mean_streamline_length_mm"));
+    CHECK((in["streamlines"].get<int>() == 0) == in["mean_streamline_length_mm"].is_null());
+  }
+  const auto& moving = r["instants"][1];
+  REQUIRE(moving["streamlines"].get<int>() > 0);
+  CHECK(moving["mean_streamline_length_mm"].get<double>() > 0);
+  CHECK(moving["mean_streamline_length_mm"].get<double>() < 400);
+  CHECK(moving["median_streamline_length_mm"].get<double>() > 0);
+  CHECK(moving["streamline_curvature_rad_per_mm"].get<double>() >= 0);
+  if (!moving["streamline_order"].is_null()) {
+    CHECK(moving["streamline_order"].get<double>() > 0.1);
+    CHECK(moving["streamline_order"].get<double>() <= 1.0 + 1e-12);
+    CHECK(moving["streamline_order_random_baseline"].get<double>() <= 1.0 / std::sqrt(2.0) + 1e-12);
+  }
+  CHECK(readText(dir / "motion" / "soil-motion.md").find("Streamline order") != std::string::npos);
+  CHECK(readText(dir / "motion" / "plots" / "velocity-sections.svg").find("streamlines") != std::string::npos);
   CHECK(r["mixing_before"].get<double>() >= 0);
   CHECK(r["mixing_after"].get<double>() <= 1);
   for (const char* f : {"soil-motion.md", "plots/velocity-sections.svg", "plots/velocity-sections.png", "plots/mixing.png"})

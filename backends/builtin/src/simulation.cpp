@@ -287,6 +287,7 @@ void DemSimulation::resetFailures() {
   for (auto& t : thread_) {
     t.pair_max = t.wall_max = 0;
     t.pair_bad = t.wall_bad = t.kick_bad = -1;
+    t.wall_bad_wall = -1;
   }
 }
 
@@ -304,8 +305,7 @@ void DemSimulation::raiseFailure() const {
         << max_overlap_ * 1e3 << " mm); the time step may be too large for the contact stiffness";
     fail(static_cast<std::size_t>(i), msg.str());
   }
-  if (const auto i = first(&ThreadState::wall_bad); i >= 0)
-    fail(static_cast<std::size_t>(i), "overlap with a wall exceeds " + std::to_string(overlapLimitFraction()) + " of its radius");
+  if (const auto i = first(&ThreadState::wall_bad); i >= 0) fail(static_cast<std::size_t>(i), wallOverlapCause(i));
   std::int64_t bad = -1;
   for (const auto& t : thread_)
     if (t.kick_bad >= 0 && (bad < 0 || t.kick_bad < bad)) bad = t.kick_bad;
@@ -315,6 +315,26 @@ void DemSimulation::raiseFailure() const {
     for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]);
     fail(i, finite ? "centre left the domain" : "position or velocity is not a number");
   }
+}
+
+// What a wall overlap beyond the limit says: which wall, and for a tool surface the two steps that
+// can be too long (docs/builtin-dem.md, "Blow-up detection").
+std::string DemSimulation::wallOverlapCause(std::int64_t particle) const {
+  int wall = -1;
+  for (const auto& t : thread_)
+    if (t.wall_bad == particle) wall = t.wall_bad_wall;
+  std::ostringstream msg;
+  msg << "overlap with ";
+  const int P = static_cast<int>(planes_.size());
+  if (wall >= P)
+    msg << "the surface of '" << meshes_[static_cast<std::size_t>(wall - P)].name << "'";
+  else
+    msg << "a bin wall";
+  msg << " exceeds " << overlapLimitFraction() << " of its radius";
+  if (wall >= P)
+    msg << "; the DEM step (dem.dt_fraction) or, on a tool the FEM client deforms, the coupling step fem.dt_s may be too "
+           "long: a flexible tool deep in dense soil needs a shorter fem.dt_s than a rigid one";
+  return msg.str();
 }
 
 void DemSimulation::fail(std::size_t i, const std::string& what) const {

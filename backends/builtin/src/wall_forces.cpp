@@ -223,7 +223,10 @@ void DemSimulation::wallLoop(int tid) {
       k.wrel_norm = std::sqrt(norm2(k.wrel));
       k.inv_ii = inv_inertia_[i];
       if (k.delta > local_max) local_max = k.delta;
-      if (k.delta > overlapLimitFraction() * radius_[i] && bad < 0) bad = static_cast<std::int64_t>(i);
+      if (k.delta > overlapLimitFraction() * radius_[i] && bad < 0) {
+        bad = static_cast<std::int64_t>(i);
+        ts.wall_bad_wall = touch[a].wall;
+      }
       const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wallMaterial(touch[a].wall)),
                                                    wc.stiffness, k, dt_, layout_.size ? wc.hist : nullptr, true);
       for (int c = 0; c < 3; ++c) {

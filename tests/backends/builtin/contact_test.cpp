@@ -356,3 +356,24 @@ TEST_CASE("a blow-up names the particle and the step", "[builtin]") {
     CHECK_THAT(msg, Catch::Contains("particle 1 ") && Catch::Contains("step 160 ") && Catch::Contains("left the domain"));
   }
 }
+
+// A particle driven into a tool surface beyond the overlap limit is reported against that surface,
+// with the two steps that can be too long (the coupling step on a deforming tool: docs/builtin-dem.md).
+TEST_CASE("a wall overlap blow-up names the tool surface and the coupling step", "[builtin]") {
+  SoilParameters p;
+  DemSimulation sim(makeSoil(p), box(0.1), 1);
+  TriangleMesh mesh = flatMesh(0.02, 4);
+  mesh.name = "PMMA";
+  mesh.material = 1;
+  sim.addMesh(mesh);
+  // 50 m/s into the face: far more than the wall spring stops within 0.25 R.
+  sim.addParticle({{0.0021, 1.05 * kR, 0.0063}, {0, -50, 0}, {0, 0, 0}, kR, 0, 0});
+  sim.setTimeStep(1e-6);
+  try {
+    sim.run(2000);
+    FAIL("no blow-up detected");
+  } catch (const BlowUp& e) {
+    const std::string msg = e.what();
+    CHECK_THAT(msg, Catch::Contains("particle 0 ") && Catch::Contains("the surface of 'PMMA'") && Catch::Contains("fem.dt_s"));
+  }
+}

@@ -26,13 +26,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string readText(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // studies/quick.json made small (support/small_study.hpp): a 140 x 80 mm bin filled 40 mm deep
 // (about 500 particles), a 120 x 20 mm tool off the bin's centre line (x = 45 mm), inserted at
 // 300 mm/s and dragged 10 mm at 100 mm/s: 95 + 100 FEM steps of 1 ms. The settled soil is shared by

@@ -12,6 +12,28 @@
 //   (cell k holds [lowest + k cell, lowest + (k + 1) cell));
 //   each cell holds the mean speed |v| of its particles (NaN where a cell has none). Map axes: (z, y)
 //   for Axis::X, (z, x) for Axis::Y.
+// - flowSection(): on the same plane, thickness and binning as velocitySection(), the cell means of
+//   the in-plane velocity components (u along z, v along y for Axis::X, along x for Axis::Y; m/s;
+//   NaN where a cell has no particle) and, per cell, the alignment of its moving particles (|v| >
+//   threshold): |(1/n) sum v_i/|v_i||, the length of the mean of their 3-D unit velocity vectors
+//   (1 all parallel; for n independent random directions its rms is 1/sqrt(n)); NaN below 2 moving
+//   particles.
+// - alignmentOrder(): the local alignment order of a flow section, the mean of the cells' alignment
+//   weighted by their moving particles, over the cells with at least 2; beside it the same weighted
+//   mean of 1/sqrt(n), what independent random directions would give. No such cell: cells 0, NaN.
+// - traceStreamlines(): the streamline through the centre of every cell in motion (its mean in-plane
+//   velocity faster than the threshold). The field at a point is the bilinear interpolation of the
+//   cell-centre mean velocities over the surrounding cells in motion (weights renormalised; a
+//   linear field is reproduced exactly inside the region). Traced both ways from the seed with the
+//   midpoint rule (RK2) at a fixed arc-length step `step_fraction` x cell along the unit direction;
+//   a direction ends at the step that would leave the region (its end point in a cell not in
+//   motion or off the map), where the interpolated speed is not above the threshold, at a turn of
+//   more than `max_step_turn_rad` between consecutive steps (a kink, the flow is not resolved), or
+//   when the line's total absolute turning (both directions) would exceed `max_total_turn_rad`
+//   (one loop: a closed circle gives its circumference). Points in map coordinates (m).
+// - streamlineStatistics(): count, mean and median length (m) of the streamlines, and their mean
+//   absolute curvature, total turning over total length (rad/m; 1/r on circles of radius r). No
+//   streamline: count 0 and NaN for the rest (no motion is not a length of zero).
 // - movingExtent(): the region of the particles faster than `threshold` (|v| > threshold), as the
 //   union of their spheres: depth below `surface_y` of its lowest point, its length along z and its
 //   width along x (the paper's 83 mm against 55-58 mm is this depth). No fast particle: count 0 and
@@ -31,7 +53,9 @@
 //   (the only DEM tool collection when `tool` is empty), matched by time (within 1e-9 s);
 //   readParticleFrame() one particle file. Both throw InputError naming the file (missing collection,
 //   arrays velocity_m_s / radius_m / layer missing or of another size, more than one tool and none
-//   chosen, a particle time without a tool file).
+//   chosen, a particle time without a tool file). A run whose DIR/sensors.json exists and says
+//   "complete": false (a failed simulation) is refused naming that file; without a sidecar (tracks
+//   measured elsewhere) there is nothing to check.
 // - toolDisplacement(): the mean z of the tool's nodes at a frame minus at the first frame (the
 //   insertion does not move it in z).
 #pragma once
@@ -72,6 +96,45 @@ struct SectionMap {
 };
 
 SectionMap velocitySection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m);
+
+// The in-plane mean velocity and the per-cell alignment of a section (flowSection()).
+struct FlowSection {
+  SectionMap velocity_u, velocity_v;  // m/s, on the map's u (z) and v axes
+  SectionMap alignment;               // |mean unit vector| of the moving particles; NaN below 2
+  std::vector<std::size_t> moving;    // moving particles per cell
+  double threshold_m_s = 0;
+};
+
+FlowSection flowSection(const ParticleFrame& frame, Axis axis, double position_m, double half_thickness_m, double cell_m,
+                        double threshold_m_s);
+
+struct AlignmentOrder {
+  std::size_t cells = 0, particles = 0;
+  double order = 0, random_baseline = 0;  // NaN when cells == 0
+};
+
+AlignmentOrder alignmentOrder(const FlowSection& flow);
+
+struct StreamlineRules {
+  double step_fraction = 0.25;               // step length / cell
+  double max_step_turn_rad = 0.5235987755982988;   // 30 degrees
+  double max_total_turn_rad = 6.283185307179586;   // one full turn
+};
+
+struct Streamline {
+  std::vector<double> u_m, v_m;  // points along the line, map coordinates
+  double seed_u_m = 0, seed_v_m = 0;
+  double length_m = 0, turning_rad = 0;
+};
+
+std::vector<Streamline> traceStreamlines(const FlowSection& flow, const StreamlineRules& rules);
+
+struct StreamlineStatistics {
+  std::size_t count = 0;
+  double mean_length_m = 0, median_length_m = 0, curvature_rad_per_m = 0;  // NaN when count == 0
+};
+
+StreamlineStatistics streamlineStatistics(const std::vector<Streamline>& lines);
 
 struct MovingExtent {
   double threshold_m_s = 0;

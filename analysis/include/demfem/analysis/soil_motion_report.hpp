@@ -8,15 +8,23 @@
 //   (x = mid of its bounds), one horizontal section at half the tool's tip depth, the moving extent
 //   above `threshold_m_s`, the speed range in front of the tool (across its width, from its tip up to
 //   the surface, from its front face to `front_reach_m` ahead) and the mixing index; the mixing of the
-//   first frame (before) and of the last (after the tool passed). The surface is the highest particle
+//   first frame (before) and of the last (after the tool passed); on the vertical section's plane and
+//   thickness, the flow section in cells of `flow_cell_m`, its alignment order and its streamlines
+//   (soil_motion.hpp, flowSection(), alignmentOrder(), traceStreamlines() with `streamlines`). The surface is the highest particle
 //   top (y + radius) of the first frame; layer boundaries are layerBoundaries() of the first frame.
 // - soilMotionJson(): {"threshold_mm_s", "cell_mm", "runs": [{"run", "tool", "surface_mm",
 //   "mixing_before", "mixing_after", "instants": [{"displacement_mm", "t_s", "moving_depth_mm",
 //   "moving_length_mm", "moving_width_mm", "moving_particles", "front_speed_min_mm_s",
-//   "front_speed_median_mm_s", "front_speed_max_mm_s", "front_particles", "mixing"}]}]}.
+//   "front_speed_median_mm_s", "front_speed_max_mm_s", "front_particles", "mixing", "streamline_order",
+//   "streamline_order_random_baseline", "streamline_order_cells", "streamlines",
+//   "mean_streamline_length_mm", "median_streamline_length_mm", "streamline_curvature_rad_per_mm"}]}]}
+//   beside "flow_cell_mm", "streamline_step_mm", "streamline_max_step_turn_deg" and
+//   "streamline_max_total_turn_deg"; an order without cells and the lengths and curvature without
+//   streamlines are null (nothing moves: no value, not zero).
 // - writeSoilMotionOutputs() stages soil-motion.json, soil-motion.md (the Markdown section) and, with
 //   a renderer, plots/velocity-sections.{svg,png} (vertical sections, one column per run, one row per
-//   displacement, the moving region's and the tool's outlines), plots/horizontal-sections.{svg,png}
+//   displacement, the moving region's and the tool's outlines and the streamlines),
+//   plots/horizontal-sections.{svg,png}
 //   and plots/mixing.{svg,png} (layer-mixing maps before and after), each with its .gp scripts.
 #pragma once
 
@@ -39,6 +47,8 @@ struct SoilMotionSettings {
   double half_thickness_m = 0.005;      // sections: centres within this of the plane
   double front_reach_m = 0.0105;        // ahead of the front face (one largest diameter)
   double mixing_cell_m = 0.02;
+  double flow_cell_m = 0.02;            // flow sections (two diameters: about 5 particles per cell on the section)
+  StreamlineRules streamlines;
   std::string tool;                     // empty: the run's only tool
 };
 
@@ -49,6 +59,10 @@ struct SoilMotionInstant {
   MovingExtent extent;
   SpeedRange front;
   double mixing = 0;
+  FlowSection flow;
+  AlignmentOrder order;
+  std::vector<Streamline> streamlines;
+  StreamlineStatistics streamline_statistics;
 };
 
 struct SoilMotionRun {

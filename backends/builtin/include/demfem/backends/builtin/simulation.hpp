@@ -179,6 +179,7 @@ class DemSimulation {
     std::vector<double> batch_r2, batch_r, batch_rinv, batch_w2, batch_wnorm;
     double pair_max = 0, wall_max = 0;   // largest overlap of its pair and of its wall contacts
     std::int64_t pair_bad = -1, wall_bad = -1, kick_bad = -1;  // first failing particle, -1 none
+    int wall_bad_wall = -1;              // the wall (planes, then meshes) of wall_bad's overlap
     bool moved = false;                  // a particle moved beyond skin/2 since the last build
   };
 
@@ -242,6 +243,7 @@ class DemSimulation {
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
   void useMaterial(int material, bool particle);
   [[noreturn]] void fail(std::size_t particle, const std::string& what) const;
+  std::string wallOverlapCause(std::int64_t particle) const;  // the message of a wall overlap failure
   void checkRestoredAgainst(const DemSimulation& live, const adapter::PayloadReader& in) const;
 
   MaterialTable table_;
