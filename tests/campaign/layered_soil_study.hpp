@@ -18,7 +18,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <map>
 #include <optional>
 
@@ -46,32 +45,6 @@ struct LayeredSoilOutcome {
   std::optional<Diagnosis> diagnosis;
   double diagnosis_wall_s = 0;
 };
-
-// The soil test cases' shared caches in the build directory: settled soils ($DEMFEM_SOIL_DIR, set
-// here) and model runs (the returned run-cache directory; RunCache keys a run by study, deposition
-// seed and case), so the calibration and both diagnoses of one build reuse each other's depositions
-// and runs, also from concurrent test processes (both caches write by rename). The directory is
-// named after the test executable's size and modification time: a rebuilt model never reads the
-// runs of the previous build; directories of earlier builds made more than a day ago are removed (a test
-// of an earlier build may still be running in a younger one). Throws std::runtime_error when the
-// variable cannot be set.
-inline std::filesystem::path sharedSoilCache() {
-  namespace fs = std::filesystem;
-  const fs::path exe = fs::read_symlink("/proc/self/exe");
-  const auto stamp = static_cast<unsigned long long>(fs::last_write_time(exe).time_since_epoch().count());
-  const fs::path root = fs::path(DEMFEM_BINARY_DIR) / "tests/campaign/soil-cache";
-  const fs::path dir = root / (exe.filename().string() + "-" + std::to_string(fs::file_size(exe)) + "-" + std::to_string(stamp));
-  std::error_code ignored;
-  const auto day_ago = fs::file_time_type::clock::now() - std::chrono::hours(24);
-  if (fs::is_directory(root))
-    for (const auto& entry : fs::directory_iterator(root))
-      if (entry.path() != dir && entry.path().filename().string().starts_with(exe.filename().string() + "-") &&
-          fs::last_write_time(entry.path(), ignored) < day_ago)
-        fs::remove_all(entry.path(), ignored);
-  fs::create_directories(dir / "soil");
-  if (::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1) != 0) throw std::runtime_error("cannot set DEMFEM_SOIL_DIR to " + (dir / "soil").string());
-  return dir / "runs";
-}
 
 inline std::filesystem::path fixtureData(const std::string& name) {
   return std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data" / name;

@@ -3,16 +3,45 @@
 // and of a single-layer bin (0.5 everywhere) simulated by LIGGGHTS itself from the deck kept with the
 // test, three seeds, depths 20, 40 and 55 mm; the built-in model (rigid plate, draught) is
 // calibrated and diagnosed against them. The LIGGGHTS recordings are made once per build directory
-// (cachedLayeredBin).
+// (cachedLayeredBin), the built-in runs once per test executable (sharedSoilCache).
 #include "layered_soil_study.hpp"
 
 #include <catch2/catch.hpp>
+
+#include <chrono>
+#include <cstdlib>
 
 using namespace demfem;
 
 namespace {
 
 constexpr double kWindowBeginMm = 10;  // to the stroke's end, 40 mm (liggghts_layered_bin.hpp)
+
+// The soil test cases' shared caches in the build directory: settled soils ($DEMFEM_SOIL_DIR, set
+// here) and model runs (the returned run-cache directory; RunCache keys a run by study, deposition
+// seed and case), so the calibration and both diagnoses of one build reuse each other's depositions
+// and runs, also from concurrent test processes (both caches write by rename). The directory is
+// named after the test executable's size and modification time: a rebuilt model never reads the
+// runs of the previous build; directories of earlier builds made more than a day ago are removed
+// (a test of an earlier build may still be running in a younger one). Throws std::runtime_error
+// when the variable cannot be set.
+std::filesystem::path sharedSoilCache() {
+  namespace fs = std::filesystem;
+  const fs::path exe = fs::read_symlink("/proc/self/exe");
+  const auto stamp = static_cast<unsigned long long>(fs::last_write_time(exe).time_since_epoch().count());
+  const fs::path root = fs::path(DEMFEM_BINARY_DIR) / "tests/campaign/soil-cache";
+  const fs::path dir = root / (exe.filename().string() + "-" + std::to_string(fs::file_size(exe)) + "-" + std::to_string(stamp));
+  std::error_code ignored;
+  const auto day_ago = fs::file_time_type::clock::now() - std::chrono::hours(24);
+  if (fs::is_directory(root))
+    for (const auto& entry : fs::directory_iterator(root))
+      if (entry.path() != dir && entry.path().filename().string().starts_with(exe.filename().string() + "-") &&
+          fs::last_write_time(entry.path(), ignored) < day_ago)
+        fs::remove_all(entry.path(), ignored);
+  fs::create_directories(dir / "soil");
+  if (::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1) != 0) throw std::runtime_error("cannot set DEMFEM_SOIL_DIR to " + (dir / "soil").string());
+  return dir / "runs";
+}
 
 std::vector<analysis::Recording> liggghtsRecordings(const campaign::test::LayeredBin& bin) {
   const auto files = campaign::test::cachedLayeredBin(bin, std::filesystem::path(DEMFEM_BINARY_DIR) / "tests/campaign/liggghts-cache");
@@ -43,7 +72,7 @@ void warnRanking(const campaign::Diagnosis& d) {
 // recordings' three seeds would triple it; docs/diagnosis.md, soil).
 campaign::DiagnosisSettings diagnosisSettings(const campaign::test::LayeredBin& bin) {
   campaign::DiagnosisSettings d;
-  d.calibration = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, campaign::test::sharedSoilCache(), 1);
+  d.calibration = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, sharedSoilCache(), 1);
   return d;
 }
 
@@ -55,7 +84,7 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   const auto recordings = liggghtsRecordings(bin);
   // Every case at the three seeds LIGGGHTS ran: the model's seed scatter averages out like the
   // recordings'.
-  const auto options = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, campaign::test::sharedSoilCache(), bin.seeds);
+  const auto options = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, sharedSoilCache(), bin.seeds);
   const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, nullptr);
 
   REQUIRE(outcome.depths.size() == 3);
