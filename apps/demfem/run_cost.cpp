@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace demfem::cli {
 
@@ -15,10 +16,18 @@ namespace {
 
 // Measured on the 2-core development machine; the only place these figures enter the code (the
 // DEM speeds are the backend registry's, backend_registry.cpp).
-// docs/fem.md: the PMMA plate (738 keypoints): reduction 26 s, 23 ms per FEM step (wall, under load).
+// docs/fem.md ("Measured"): the PMMA plate (738 keypoints): reduction 26 s, a full-integration FEM
+// step 23 ms (wall, under load), a modal step 0.13 ms (demfem-bench-coupled, quiet machine).
 constexpr double kReferenceKeypoints = 738;
 constexpr double kReferenceReductionS = 26.0;
-constexpr double kReferenceFemStepS = 0.023;
+
+double referenceFemStepS(study::FemIntegration integration) {
+  switch (integration) {
+    case study::FemIntegration::Full: return 0.023;
+    case study::FemIntegration::Modal: return 1.3e-4;
+  }
+  throw std::logic_error("referenceFemStepS: unknown integration");
+}
 
 std::int64_t wholeSteps(double time_s, double dt_s) { return std::max<std::int64_t>(1, std::llround(std::ceil(time_s / dt_s - 1e-9))); }
 
@@ -51,7 +60,7 @@ RunCost estimateRunCost(const study::Study& s) {
   }
   if (cost.keypoints > 0) {
     const double scale = std::pow(cost.keypoints / kReferenceKeypoints, 2);
-    cost.fem_wall_s = scale * (kReferenceReductionS + kReferenceFemStepS * static_cast<double>(cost.fem_steps));
+    cost.fem_wall_s = scale * (kReferenceReductionS + referenceFemStepS(s.fem.integration) * static_cast<double>(cost.fem_steps));
   }
   return cost;
 }

@@ -12,7 +12,8 @@
 // - Particles: builtin::estimatedParticleCount (bin volume below the fill, packing, sizes).
 // - Wall time: DEM particle-steps at the measured speed of the study's backend (the backend
 //   registry's DemSpeed, backend_registry.hpp: threads and particle-steps per second; none for a
-//   test backend, which simulates no particles), plus the keypoint reduction and FEM steps scaled
+//   test backend, which simulates no particles), plus the keypoint reduction and FEM steps (of the
+//   study's fem.integration) scaled
 //   from the measured PMMA plate by (keypoints / 738)^2. A machine that is faster or less loaded than the 2-core one measured runs
 //   quicker.
 #pragma once

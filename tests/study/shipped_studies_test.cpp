@@ -87,7 +87,10 @@ TEST_CASE("the soil-bin studies carry Table 1's depths and velocities", "[study]
     CHECK_FALSE(s.dem.dt_s);
     CHECK(s.dem.criterion == demfem::study::TimeStepCriterion::StiffestSpring);
     CHECK(s.dem.dt_fraction == 0.1);
-    CHECK(s.fem.dt_s == 0.001);    // Table 3
+    // Table 3's 1 ms, halved for the flexible PMMA tool at 30 and 42 mm, where the explicit
+    // exchange is unstable at 1 ms (docs/builtin-dem.md, "Blow-up detection").
+    const bool flexible_deep = s.tools[0].name == "PMMA" && c.depth_m > 0.020;
+    CHECK(s.fem.dt_s == (flexible_deep ? 0.0005 : 0.001));
   }
   CHECK(load("paper/s235_dem_18.json").kind == StudyKind::DemOnly);
   CHECK_FALSE(load("paper/s235_dem_18.json").tools[0].fem.deformable);
