@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
 
     nlohmann::json depths = nlohmann::json::array();
     std::printf("%-8s %20s %20s %20s\n", "depth", "LIGGGHTS draught (N)", "two layers (N)", "one layer (N)");
-    const auto seedJson = [](const campaign::test::SeedMean& m) { return nlohmann::json{{"mean_N", m.mean_N}, {"sd_N", m.sd_N}}; };
+    const auto seedJson = [](const campaign::test::SeedMean& m) { return nlohmann::json{{"mean_N", m.mean_N}, {"sd_N", m.sd_N}, {"failed_runs", m.failed_runs}}; };
     for (const auto& d : o.depths) {
       std::printf("%5.0f mm %12.3f +- %5.3f %12.3f +- %5.3f %12.3f +- %5.3f\n", d.depth_mm, d.liggghts.mean_N, d.liggghts.sd_N, d.calibrated.mean_N,
                   d.calibrated.sd_N, d.single_layer.mean_N, d.single_layer.sd_N);

@@ -45,7 +45,7 @@ class Evaluator {
     measured_ = quantities(recordings, options.objective, false);
     if (!options.cache_dir.empty()) cache_.emplace(options.cache_dir);
     scratch_ = options.cache_dir.empty() ? fs::temp_directory_path() / ("demfem-calibrate-" + std::to_string(getpid()))
-                                         : options.cache_dir / "scratch";
+                                         : options.cache_dir / ("scratch-" + std::to_string(getpid()));  // one per process: a cache may be shared
   }
 
   ~Evaluator() {

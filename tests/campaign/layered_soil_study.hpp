@@ -24,9 +24,11 @@
 namespace demfem::campaign::test {
 
 // Window mean of the draught over the seeds (the same seeds 1..n on both engines): mean and sample
-// standard deviation.
+// standard deviation of the seeds whose run gave a draught, and how many runs failed (a DEM
+// blow-up or the overlap guard: no draught, left out of the mean).
 struct SeedMean {
   double mean_N = 0, sd_N = 0;
+  int failed_runs = 0;
 };
 
 struct DepthFigures {
@@ -83,17 +85,18 @@ inline SeedMean seedMean(const std::vector<double>& values) {
 inline std::map<double, SeedMean> predictSeeds(const nlohmann::ordered_json& study, const std::string& origin,
                                                const std::vector<analysis::Recording>& recordings, Model& model,
                                                const CalibrationOptions& options, int seeds) {
-  std::map<double, std::vector<double>> values;
+  std::map<double, std::vector<double>> values, failed;  // failed: one entry per recording of a failed run
   for (int seed = 1; seed <= seeds; ++seed) {
     nlohmann::ordered_json s = study;
     s["soil"]["deposition"]["seed"] = seed;
     CalibrationOptions one_seed = options;  // the fits' runs at these seeds come from the run cache
     one_seed.model_seeds = 1;
     for (const auto& r : predict(s, origin, recordings, model, one_seed))
-      if (r.quantity == "window_mean_force_N") values[r.key.depth_mm].push_back(r.simulated);
+      if (r.quantity == "window_mean_force_N") (r.missing ? failed[r.key.depth_mm] : values[r.key.depth_mm]).push_back(r.simulated);
   }
   std::map<double, SeedMean> out;
   for (const auto& [depth, v] : values) out[depth] = seedMean(v);
+  for (const auto& [depth, f] : failed) out[depth].failed_runs = static_cast<int>(f.size());
   return out;
 }
 

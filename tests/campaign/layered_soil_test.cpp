@@ -3,12 +3,12 @@
 // and of a single-layer bin (0.5 everywhere) simulated by LIGGGHTS itself from the deck kept with the
 // test, three seeds, depths 20, 40 and 55 mm; the built-in model (rigid plate, draught) is
 // calibrated and diagnosed against them. The LIGGGHTS recordings are made once per build directory
-// (cachedLayeredBin).
+// (cachedLayeredBin), the built-in runs once per test executable (sharedSoilCache).
 #include "layered_soil_study.hpp"
-#include "weight_drop_fixture.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cstdlib>
 
 using namespace demfem;
@@ -16,6 +16,32 @@ using namespace demfem;
 namespace {
 
 constexpr double kWindowBeginMm = 10;  // to the stroke's end, 40 mm (liggghts_layered_bin.hpp)
+
+// The soil test cases' shared caches in the build directory: settled soils ($DEMFEM_SOIL_DIR, set
+// here) and model runs (the returned run-cache directory; RunCache keys a run by study, deposition
+// seed and case), so the calibration and both diagnoses of one build reuse each other's depositions
+// and runs, also from concurrent test processes (both caches write by rename). The directory is
+// named after the test executable's size and modification time: a rebuilt model never reads the
+// runs of the previous build; directories of earlier builds made more than a day ago are removed
+// (a test of an earlier build may still be running in a younger one). Throws std::runtime_error
+// when the variable cannot be set.
+std::filesystem::path sharedSoilCache() {
+  namespace fs = std::filesystem;
+  const fs::path exe = fs::read_symlink("/proc/self/exe");
+  const auto stamp = static_cast<unsigned long long>(fs::last_write_time(exe).time_since_epoch().count());
+  const fs::path root = fs::path(DEMFEM_BINARY_DIR) / "tests/campaign/soil-cache";
+  const fs::path dir = root / (exe.filename().string() + "-" + std::to_string(fs::file_size(exe)) + "-" + std::to_string(stamp));
+  std::error_code ignored;
+  const auto day_ago = fs::file_time_type::clock::now() - std::chrono::hours(24);
+  if (fs::is_directory(root))
+    for (const auto& entry : fs::directory_iterator(root))
+      if (entry.path() != dir && entry.path().filename().string().starts_with(exe.filename().string() + "-") &&
+          fs::last_write_time(entry.path(), ignored) < day_ago)
+        fs::remove_all(entry.path(), ignored);
+  fs::create_directories(dir / "soil");
+  if (::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1) != 0) throw std::runtime_error("cannot set DEMFEM_SOIL_DIR to " + (dir / "soil").string());
+  return dir / "runs";
+}
 
 std::vector<analysis::Recording> liggghtsRecordings(const campaign::test::LayeredBin& bin) {
   const auto files = campaign::test::cachedLayeredBin(bin, std::filesystem::path(DEMFEM_BINARY_DIR) / "tests/campaign/liggghts-cache");
@@ -31,17 +57,22 @@ double twoStandardErrors(const campaign::test::SeedMean& a, const campaign::test
   return 2 * std::sqrt((a.sd_N * a.sd_N + b.sd_N * b.sd_N) / 3);
 }
 
+// The ranking printed, and every baseline run ran: a case the study as given fails on is left out of
+// every error (diagnose.hpp) and would shrink what the diagnosis is tested on.
 void warnRanking(const campaign::Diagnosis& d) {
+  for (const auto& k : d.failed_baseline_cases) WARN("baseline run failed: " << k.title());
+  CHECK(d.failed_baseline_cases.empty());
   for (const auto& c : d.ranking)
     if (c.fitted)
       WARN(c.id << ": held-out error " << c.error_before_percent << " % -> " << c.error_after_percent << " % (" << c.split << "), delta BIC "
                 << c.delta_bic);
 }
 
-// The diagnosis' fits: one model seed each and 8 evaluations per fit, to fit CI's time.
-campaign::DiagnosisSettings diagnosisSettings(const campaign::test::LayeredBin& bin, const std::filesystem::path& cache) {
+// The diagnosis' fits: one model seed each and 8 evaluations per fit, to fit CI's time (the
+// recordings' three seeds would triple it; docs/diagnosis.md, soil).
+campaign::DiagnosisSettings diagnosisSettings(const campaign::test::LayeredBin& bin) {
   campaign::DiagnosisSettings d;
-  d.calibration = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, cache, 1);
+  d.calibration = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, sharedSoilCache(), 1);
   return d;
 }
 
@@ -49,13 +80,11 @@ campaign::DiagnosisSettings diagnosisSettings(const campaign::test::LayeredBin& 
 
 TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth, one shallow layer under-predicts the deepest",
           "[campaign][physics]") {
-  const campaign::test::TempDir dir("layered-soil");
-  ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
   const campaign::test::LayeredBin bin;
   const auto recordings = liggghtsRecordings(bin);
   // Every case at the three seeds LIGGGHTS ran: the model's seed scatter averages out like the
   // recordings'.
-  const auto options = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, dir.path() / "runs", 3);
+  const auto options = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, sharedSoilCache(), bin.seeds);
   const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, nullptr);
 
   REQUIRE(outcome.depths.size() == 3);
@@ -65,8 +94,17 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
     WARN(d.depth_mm << " mm, window mean of 3 seeds: LIGGGHTS " << d.liggghts.mean_N << " +- " << d.liggghts.sd_N
                     << " N, layered-soil preset " << d.calibrated.mean_N << " +- " << d.calibrated.sd_N << " N, one layer fitted at "
                     << shallow.depth_mm << " mm " << d.single_layer.mean_N << " +- " << d.single_layer.sd_N << " N");
-  // The model seed reaches the packing: the three seeds' draughts differ.
-  for (const auto& d : outcome.depths) CHECK(d.calibrated.sd_N > 0.01 * d.calibrated.mean_N);
+  // A failed prediction run has no draught: it is left out of the means (scored as 0 N it would pass
+  // the under-prediction below for the wrong reason) and named; at least two seeds of every depth
+  // ran (docs/calibration.md, "Not done yet": one such failure, not reproduced when rerun alone). The
+  // model seed reaches the packing: the seeds' draughts differ.
+  for (const auto& d : outcome.depths) {
+    if (d.calibrated.failed_runs + d.single_layer.failed_runs > 0)
+      WARN(d.depth_mm << " mm: failed runs, layered-soil preset " << d.calibrated.failed_runs << ", one layer " << d.single_layer.failed_runs);
+    CHECK(bin.seeds - d.calibrated.failed_runs >= 2);
+    CHECK(bin.seeds - d.single_layer.failed_runs >= 2);
+    CHECK(d.calibrated.sd_N > 0.01 * d.calibrated.mean_N);
+  }
   REQUIRE(outcome.layered.stages.size() == 2);  // 20 mm: the top layer, 40 mm: the bottom layer; 55 mm adds none
   for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated.mean_N - d.liggghts.mean_N) <= twoStandardErrors(d.calibrated, d.liggghts));
   // One layer fitted at the shallowest depth matches it and under-predicts the deepest (the paper's
@@ -76,16 +114,12 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   CHECK(deep.liggghts.mean_N - deep.single_layer.mean_N > twoStandardErrors(deep.single_layer, deep.liggghts));
 }
 
-// Hidden (not run by ctest): measured at 40.9 %, short of the 50 % gain (docs/diagnosis.md, soil);
-// run it with `campaign_soil_tests "[layered-diagnosis]"`.
 TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-layer study names layered_soil",
-          "[campaign][physics][.][layered-diagnosis]") {
-  const campaign::test::TempDir dir("layered-diagnose");
-  ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
+          "[campaign][physics][layered-diagnosis]") {
   const campaign::test::LayeredBin bin;
   // The single layer has the top layer's friction (the deck's 0.2): right at the shallowest depth,
   // blind to the stronger soil below (the first test case's single-layer fit at 20 mm).
-  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"),
+  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin),
                                                      campaign::test::singleLayerStudy(bin, 0.2));
   WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent << " %, gain "
                      << d.gain_percent << " %");
@@ -96,16 +130,16 @@ TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-la
   CHECK(d.gain_percent >= 50);
 }
 
-// Hidden (not run by ctest): measured with `layered_soil` named, because the baseline's 55 mm run
-// failed and scored as missing (docs/diagnosis.md, soil); run it with
-// `campaign_soil_tests "[uniform-diagnosis]"`.
+// Hidden (not run by ctest): at one model seed it named end_wall (held-out error 24.7 % -> 9.4 %,
+// gain 62 %) where an earlier run found no significant discrepancy (17.6 %): one model seed is one
+// packing shared by every depth, whose deviation from the recordings' three-seed means a fold's fit
+// carries over to the held-out depth. The recordings' three seeds would triple its cost beyond CI's
+// (docs/diagnosis.md, soil). Run it with `campaign_soil_tests "[uniform-diagnosis]"`.
 TEST_CASE("soil against LIGGGHTS: diagnose of a single-layer bin with the same single-layer study finds no significant discrepancy",
           "[campaign][physics][.][uniform-diagnosis]") {
-  const campaign::test::TempDir dir("uniform-diagnose");
-  ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
   campaign::test::LayeredBin bin;
   bin.uniform_friction = 0.5;  // the single-layer study's friction (tests/campaign/data/single_layer_bin.json)
-  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin, dir.path() / "runs"),
+  const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin),
                                                      campaign::test::singleLayerStudy(bin, std::nullopt));
   WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent << " %");
   warnRanking(d);

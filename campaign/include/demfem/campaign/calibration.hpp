@@ -16,10 +16,11 @@
 //   run concurrently on `jobs` threads, after Model::prepare() with the studies of those not in
 //   the run cache.
 // - Every model run goes through the RunCache in `cache_dir` (empty = none): a repeated or resumed
-//   calibration reruns nothing already run. A run that fails with adapter::CouplingError
-//   SimulationFailed (a DEM blow-up at an extreme value) is not cached, is counted in failed_runs
-//   and its case's quantities are missing from that evaluation (scored as objective.hpp says);
-//   every other failure is thrown.
+//   calibration reruns nothing already run; several processes may share one `cache_dir` (entries
+//   are written by rename, each process runs in its own scratch directory). A run that fails with
+//   adapter::CouplingError SimulationFailed (a DEM blow-up at an extreme value) is not cached, is
+//   counted in failed_runs and its case's quantities are missing from that evaluation (scored as
+//   objective.hpp says); every other failure is thrown.
 // - Uncertainty: local curvature. The Gauss-Newton Hessian H = 2 J^T J of chi2 in optimiser
 //   coordinates from central differences of the residuals (step `curvature_step`); covariance
 //   2 H^-1 (Delta chi2 = 1 at one standard deviation); converted to file units (log parameters:
