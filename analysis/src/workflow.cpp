@@ -113,7 +113,13 @@ std::vector<Comparison> pairCases(const std::vector<Case>& measured, const std::
   for (const Case& m : measured) {
     const auto s = find(simulated, m.key);
     if (s == simulated.end()) unmatched.push_back(m.key.title() + " (measured only)");
-    else pairs.push_back(Comparison{m.key, m, *s});
+    else {
+      Comparison c;  // the differences are filled by the caller
+      c.key = m.key;
+      c.measured = m;
+      c.simulated = *s;
+      pairs.push_back(std::move(c));
+    }
   }
   for (const Case& s : simulated)
     if (find(measured, s.key) == measured.end()) unmatched.push_back(s.key.title() + " (simulated only)");

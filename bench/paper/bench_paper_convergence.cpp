@@ -98,7 +98,10 @@ int main(int argc, char** argv) {
       const study::Study st = study::loadStudy(c.run_dir / "study.json");
       const double dt_s = study::demStepDividing(physics::demTimeStep(st).step_s, st.fem.dt_s);
       if (c.state != campaign::CaseState::Done) {  // a blow-up: this step is unstable
-        campaign::ConvergencePoint failed{variants[i].first, dt_s, variants[i].second};
+        campaign::ConvergencePoint failed;
+        failed.dt_fraction = variants[i].first;
+        failed.dt_s = dt_s;
+        failed.seed = variants[i].second;
         failed.wall_s = c.wall_s;
         failed.failure = c.message;
         points.push_back(failed);
