@@ -1,11 +1,12 @@
-#include "report_section.hpp"
+// The rendering of report sections (demfem/analysis/report_section.hpp).
+#include "demfem/analysis/report_section.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
-namespace demfem::analysis::detail {
+namespace demfem::analysis::report {
 
 std::string num(double value) {
   if (!std::isfinite(value)) return "nan";
@@ -18,6 +19,13 @@ std::string shortNum(double value, int digits) {
   if (!std::isfinite(value)) return "-";
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+  return buffer;
+}
+
+std::string formatted(const char* format, double value) {
+  if (!std::isfinite(value)) return "-";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, format, value);
   return buffer;
 }
 
@@ -35,8 +43,6 @@ struct CsvText {
   std::string operator()(bool v) const { return v ? "true" : "false"; }
 };
 
-}  // namespace
-
 struct JsonValue {
   nlohmann::json operator()(double v) const { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
   nlohmann::json operator()(const std::optional<double>& v) const { return v ? (*this)(*v) : nlohmann::json(nullptr); }
@@ -45,14 +51,28 @@ struct JsonValue {
   nlohmann::json operator()(bool v) const { return v; }
 };
 
+}  // namespace
+
 std::string csvText(const CellValue& value) { return std::visit(CsvText{}, value); }
 
 nlohmann::json jsonOf(const CellValue& value) { return std::visit(JsonValue{}, value); }
 
-nlohmann::json RowValues::json() const {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [n, v] : cells_) j[n] = jsonOf(v);
-  return j;
+bool inCsv(Output output) {
+  switch (output) {
+    case Output::CsvAndJson: return true;
+    case Output::JsonOnly: return false;
+    case Output::MarkdownOnly: return false;
+  }
+  return false;
+}
+
+bool inJson(Output output) {
+  switch (output) {
+    case Output::CsvAndJson: return true;
+    case Output::JsonOnly: return true;
+    case Output::MarkdownOnly: return false;
+  }
+  return false;
 }
 
 const CellValue& RowValues::operator[](const std::string& name) const {
@@ -86,7 +106,11 @@ MarkdownCell number(const std::string& column, int digits) {
 }
 
 MarkdownCell plusMinus(const std::string& mean, const std::string& spread, int digits) {
-  return [mean, spread, digits](const RowValues& v) { return detail::plusMinus(v.number(mean), v.number(spread), digits); };
+  return [mean, spread, digits](const RowValues& v) { return report::plusMinus(v.number(mean), v.number(spread), digits); };
+}
+
+MarkdownCell format(const std::string& column, const char* format) {
+  return [column, format](const RowValues& v) { return formatted(format, v.number(column)); };
 }
 
 MarkdownCell literal(std::string text) {
@@ -101,8 +125,10 @@ MarkdownCell concat(std::vector<MarkdownCell> parts) {
   };
 }
 
-MarkdownCell onlyIf(const std::string& flag_column, MarkdownCell cell) {
-  return [flag_column, cell = std::move(cell)](const RowValues& v) { return v.flag(flag_column) ? cell(v) : std::string("-"); };
+MarkdownCell onlyIf(const std::string& flag_column, MarkdownCell cell, std::string otherwise) {
+  return [flag_column, cell = std::move(cell), otherwise = std::move(otherwise)](const RowValues& v) {
+    return v.flag(flag_column) ? cell(v) : otherwise;
+  };
 }
 
 }  // namespace md
@@ -143,4 +169,4 @@ std::string csvTable(const std::vector<std::string>& header, const std::vector<s
   return out.str();
 }
 
-}  // namespace demfem::analysis::detail
+}  // namespace demfem::analysis::report

@@ -7,6 +7,9 @@
 #include <vector>
 
 namespace demfem::analysis::detail {
+
+using namespace report;
+
 namespace {
 
 // "a f^b" of the fit whose columns start with `side` (measured_ / simulated_).

@@ -1,11 +1,10 @@
 // The tables of the analysis reports (workflow_output.cpp writes their CSV and Markdown,
 // workflow_json.cpp their JSON): each declared once, here, with the rows it is made of
-// (report_section.hpp says how a section renders).
+// (demfem/analysis/report_section.hpp says how a section renders).
 #pragma once
 
+#include "demfem/analysis/report_section.hpp"
 #include "demfem/analysis/workflow.hpp"
-
-#include "report_section.hpp"
 
 #include <string>
 #include <vector>
@@ -50,16 +49,16 @@ struct CorrelationRow {
 
 // demfem evaluate: soil_bin_runs.csv, soil_bin_cases.csv, calibration_runs.csv; the pooled
 // calibration-weight cases in the JSON only.
-const Section<EvaluatedRun>& soilBinRunsSection();
-const Section<PooledCase>& soilBinCasesSection();
-const Section<ResponseRow>& calibrationRunsSection();
-const Section<CaseSummaryRow>& calibrationCasesSection();
+const report::Section<EvaluatedRun>& soilBinRunsSection();
+const report::Section<PooledCase>& soilBinCasesSection();
+const report::Section<ResponseRow>& calibrationRunsSection();
+const report::Section<CaseSummaryRow>& calibrationCasesSection();
 // demfem compare: means.csv (Fig. 15), spectra.csv (Fig. 17), calibration.csv (Figs. 7, 8); the
 // correlation of each measured repeat in the JSON only.
-const Section<const SoilBinComparison*>& meansSection();
-const Section<SpectrumRow>& spectraSection();
-const Section<CalibrationRow>& calibrationSection();
-const Section<CorrelationRow>& correlationsSection();
+const report::Section<const SoilBinComparison*>& meansSection();
+const report::Section<SpectrumRow>& spectraSection();
+const report::Section<CalibrationRow>& calibrationSection();
+const report::Section<CorrelationRow>& correlationsSection();
 
 // The rows of those sections, in the order of the results; each signal's force_N row first for the
 // runs, cases and spectra, deformation_mm first for calibration.csv.

@@ -18,6 +18,7 @@ namespace {
 using nlohmann::json;
 
 using namespace detail;
+using namespace report;
 
 std::string runName(const CaseKey& key, int repeat) { return key.label() + "_r" + std::to_string(repeat); }
 
@@ -29,7 +30,7 @@ std::string curveCsv(const DisplacementCurve& c) {
     rows.push_back({num(c.time_s[i]), num(c.displacement_mm[i]), num(c.force_N[i]), num(c.deformation_mm[i])});
     if (!c.tilt_deg.empty()) rows.back().push_back(num(c.tilt_deg[i]));
   }
-  return detail::csvTable(header, rows);
+  return csvTable(header, rows);
 }
 
 // Renders `figure` to plots/<name>.svg (+ .gp) when a renderer is given; returns the Markdown
@@ -204,7 +205,7 @@ std::string spectrumCsv(const Spectrum& force, const Spectrum& deformation) {
   std::vector<std::vector<std::string>> rows;
   for (std::size_t k = 0; k < force.frequency_Hz.size(); ++k)
     rows.push_back({num(force.frequency_Hz[k]), num(force.amplitude[k]), num(deformation.amplitude[k])});
-  return detail::csvTable({"frequency_Hz", "force_amplitude_N", "deformation_amplitude_mm"}, rows);
+  return csvTable({"frequency_Hz", "force_amplitude_N", "deformation_amplitude_mm"}, rows);
 }
 
 std::string settingsMarkdown(const AnalysisSettings& s) {
@@ -234,7 +235,7 @@ void writeRunFiles(const EvaluationResult& result, StagedOutput& out) {
     const std::string name = "runs/" + runName(run.key, run.repeat);
     std::vector<std::vector<std::string>> rows;
     for (std::size_t i = 0; i < run.time_s.size(); ++i) rows.push_back({num(run.time_s[i]), num(run.force_N[i]), num(run.deformation_mm[i])});
-    out.writeText(name + ".csv", detail::csvTable({"t_s", "force_N", "deformation_mm"}, rows));
+    out.writeText(name + ".csv", csvTable({"t_s", "force_N", "deformation_mm"}, rows));
     const json sidecar{{"tool", run.key.tool}, {"mass_kg", run.key.mass_kg}, {"repeat", run.repeat}, {"complete", true},
                        {"evaluated_from", run.source.string()}};
     out.writeText(name + ".json", sidecar.dump(2) + "\n");

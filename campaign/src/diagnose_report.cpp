@@ -1,5 +1,11 @@
-// Outputs of a diagnosis (diagnose.hpp): JSON, report.md, extended_study.json, before/after plots.
+// Outputs of a diagnosis (diagnose.hpp): JSON, report.md, extended_study.json, the tables ranking.csv
+// and parameters.csv (report sections: each column declared once, the Markdown tables and the JSON
+// document generated from the same declaration), before/after plots.
 #include "demfem/campaign/diagnose.hpp"
+
+#include "demfem/analysis/report_section.hpp"
+
+#include "parameter_section.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +14,7 @@
 namespace demfem::campaign {
 namespace {
 
-nlohmann::json finiteOrNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+using namespace analysis::report;
 
 std::string number(double v, int precision = 4) {
   std::ostringstream out;
@@ -17,41 +23,78 @@ std::string number(double v, int precision = 4) {
   return out.str();
 }
 
-nlohmann::json parametersJson(const std::vector<FittedParameter>& parameters) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const auto& p : parameters)
-    out.push_back({{"pointer", p.spec.pointer},
-                   {"lo", p.spec.lo},
-                   {"hi", p.spec.hi},
-                   {"initial", p.initial},
-                   {"value", p.value ? nlohmann::json(*p.value) : nlohmann::json(nullptr)},
-                   {"std_dev", finiteOrNull(p.std_dev)},
-                   {"identified", p.identified}});
-  return out;
+// One cause of the ranking; fitted causes carry their rank (from 1).
+struct CauseRow {
+  std::optional<long long> rank;
+  const CauseResult* cause;
+};
+
+// A fitted cause's number; absent (null, "nan") for a cause that was not fitted.
+CellValue ifFitted(const CauseResult& c, double value) { return c.fitted ? std::optional<double>(value) : std::nullopt; }
+
+// "label = value +- sigma; ..." of a cause's fitted parameters, from the parameter table's values.
+std::string fittedValues(const CauseResult& c) {
+  const Section<ParameterRow> section = parameterSection("cause");
+  std::string values;
+  for (const ParameterRow& row : parameterRows(c.id, c.parameters)) {
+    const RowValues p = section.values(row);
+    values += (values.empty() ? "" : "; ") + csvText(p["label"]) + " = " +
+              (p.flag("identified") ? shortNum(p.number("value")) + " +- " + shortNum(p.number("std_dev"), 2) : std::string("unidentified"));
+  }
+  return values;
 }
 
-nlohmann::json causeJson(const CauseResult& c) {
-  nlohmann::json j{{"id", c.id},
-                   {"description", c.description},
-                   {"expected_signature", c.expected_signature},
-                   {"plausible", c.match.plausible},
-                   {"evidence", c.match.evidence},
-                   {"fitted", c.fitted}};
-  if (!c.fitted) return j;
-  j["parameters"] = parametersJson(c.parameters);
-  j["unique_fit"] = c.minima == 1;
-  j["held_out"] = c.held_out;
-  j["split"] = c.split;
-  j["error_before_percent"] = c.error_before_percent;
-  j["error_after_percent"] = c.error_after_percent;
-  j["gain_percent"] = c.gain_percent;
-  j["chi2"] = c.chi2;
-  j["bic"] = c.bic;
-  j["delta_bic"] = c.delta_bic;
-  j["model_runs"] = c.model_runs;
-  j["wall_time_s"] = c.wall_time_s;
-  return j;
+// "yes", or how many distinct minima fit within the noise.
+std::string uniqueness(const RowValues& v) {
+  return v.flag("unique_fit") ? std::string("yes") : "no: " + csvText(v["distinct_minima"]) + " distinct minima within the noise";
 }
+
+// ranking.csv (and `ranking` of the JSON, each cause with its `parameters`): the causes in rank order.
+const Section<CauseRow>& rankingSection() {
+  using R = CauseRow;
+  const auto whenFitted = [](MarkdownCell cell) { return md::onlyIf("fitted", std::move(cell), ""); };
+  static const Section<R> section{
+      {{"rank", [](const R& r) -> CellValue { return r.rank ? std::optional<double>(static_cast<double>(*r.rank)) : std::nullopt; }},
+       {"id", [](const R& r) -> CellValue { return r.cause->id; }},
+       {"plausible", [](const R& r) -> CellValue { return r.cause->match.plausible; }},
+       {"fitted", [](const R& r) -> CellValue { return r.cause->fitted; }},
+       {"unique_fit", [](const R& r) -> CellValue { return r.cause->fitted && r.cause->minima == 1; }},
+       {"distinct_minima", [](const R& r) -> CellValue { return static_cast<long long>(r.cause->minima); }},
+       {"held_out", [](const R& r) -> CellValue { return r.cause->held_out; }},
+       {"split", [](const R& r) -> CellValue { return r.cause->split; }},
+       {"error_before_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_before_percent); }},
+       {"error_after_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_after_percent); }},
+       {"gain_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->gain_percent); }},
+       {"chi2", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->chi2); }},
+       {"bic", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->bic); }},
+       {"delta_bic", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->delta_bic); }},
+       {"model_runs", [](const R& r) -> CellValue { return static_cast<long long>(r.cause->model_runs); }},
+       {"wall_time_s", [](const R& r) -> CellValue { return r.cause->wall_time_s; }},
+       {"description", [](const R& r) -> CellValue { return r.cause->description; }},
+       {"expected_signature", [](const R& r) -> CellValue { return r.cause->expected_signature; }},
+       {"evidence", [](const R& r) -> CellValue { return r.cause->match.evidence; }},
+       {"fitted_values", [](const R& r) -> CellValue { return fittedValues(*r.cause); }, Output::MarkdownOnly}},
+      [](const R& r) { return r.rank ? std::to_string(*r.rank) : std::string("-"); },
+      {{"cause", md::text("id")},
+       {"fitted values (+- one sigma)", md::onlyIf("fitted", md::text("fitted_values"), "not fitted: signature absent")},
+       {"unique", whenFitted(uniqueness)},
+       {"error before (%)", whenFitted(md::number("error_before_percent"))},
+       {"error after (%)", whenFitted(md::number("error_after_percent"))},
+       {"gain (%)", whenFitted(md::number("gain_percent"))},
+       {"delta BIC", whenFitted(md::number("delta_bic"))},
+       {"split", whenFitted(md::text("split"))}},
+      "rank"};
+  return section;
+}
+
+std::vector<CauseRow> rankingRows(const Diagnosis& d) {
+  std::vector<CauseRow> rows;
+  long long rank = 0;
+  for (const CauseResult& c : d.ranking) rows.push_back({c.fitted ? std::optional<long long>(++rank) : std::nullopt, &c});
+  return rows;
+}
+
+std::vector<ParameterRow> causeParameterRows(const CauseRow& row) { return parameterRows(row.cause->id, row.cause->parameters); }
 
 // Calibrated channels of a recording (raw ones through their factors).
 std::pair<std::vector<double>, std::vector<double>> channels(const analysis::Recording& r) {
@@ -122,26 +165,6 @@ std::string signatureTable(const analysis::Signatures& s) {
   return md;
 }
 
-std::string rankingTable(const Diagnosis& d) {
-  std::string md = "| rank | cause | fitted values (+- one sigma) | unique | error before (%) | error after (%) | gain (%) | delta BIC | split |\n"
-                   "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
-  int rank = 0;
-  for (const CauseResult& c : d.ranking) {
-    if (!c.fitted) {
-      md += "| - | " + c.id + " | not fitted: signature absent | | | | | | |\n";
-      continue;
-    }
-    std::string values;
-    for (const auto& p : c.parameters)
-      values += (values.empty() ? "" : "; ") + p.spec.label() + " = " +
-                (p.value ? number(*p.value) + " +- " + number(p.std_dev, 2) : std::string("unidentified"));
-    const std::string unique = c.minima == 1 ? "yes" : "no: " + std::to_string(c.minima) + " distinct minima within the noise";
-    md += "| " + std::to_string(++rank) + " | " + c.id + " | " + values + " | " + unique + " | " + number(c.error_before_percent) + " | " +
-          number(c.error_after_percent) + " | " + number(c.gain_percent) + " | " + number(c.delta_bic) + " | " + c.split + " |\n";
-  }
-  return md;
-}
-
 nlohmann::json caseLabels(const std::vector<analysis::CaseKey>& cases) {
   nlohmann::json labels = nlohmann::json::array();
   for (const auto& c : cases) labels.push_back(c.label());
@@ -152,7 +175,11 @@ nlohmann::json caseLabels(const std::vector<analysis::CaseKey>& cases) {
 
 nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, const std::string& extended_study_path) {
   nlohmann::json ranking = nlohmann::json::array();
-  for (const CauseResult& c : d.ranking) ranking.push_back(causeJson(c));
+  for (const CauseRow& row : rankingRows(d)) {
+    nlohmann::json cause = rankingSection().json(row);
+    cause["parameters"] = parameterSection("cause").json(causeParameterRows(row));
+    ranking.push_back(cause);
+  }
   return {{"verdict", d.cause ? "cause" : "no significant discrepancy"},
           {"cause", d.cause ? nlohmann::json(*d.cause) : nlohmann::json(nullptr)},
           {"reason", d.reason},
@@ -185,7 +212,7 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   md += "Thresholds: a cause is named when the baseline error is at least " + number(settings.min_error_percent) +
         " %, its extension cuts the held-out error by at least " + number(settings.min_gain_percent) +
         " % and lowers BIC = chi2 + k ln n by at least " + number(settings.min_delta_bic) + " (docs/diagnosis.md).\n\n";
-  md += "## Signatures\n\n" + signatureTable(d.signatures) + "\n## Ranking\n\n" + rankingTable(d) + "\n## Evidence\n\n";
+  md += "## Signatures\n\n" + signatureTable(d.signatures) + "\n## Ranking\n\n" + rankingSection().markdownOf(rankingRows(d)) + "\n## Evidence\n\n";
   for (const CauseResult& c : d.ranking)
     md += "- `" + c.id + "` (" + c.description + "): expects " + c.expected_signature + ". " +
           (c.match.plausible ? "Present" : "Absent") + ": " + c.match.evidence + ".\n";
@@ -204,6 +231,12 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   }
   md += "\nWall time " + number(d.wall_time_s, 3) + " s.\n";
   out.writeText("report.md", md);
+  const std::vector<CauseRow> rows = rankingRows(d);
+  std::vector<ParameterRow> parameters;
+  for (const CauseRow& row : rows)
+    for (const ParameterRow& p : causeParameterRows(row)) parameters.push_back(p);
+  out.writeText("ranking.csv", rankingSection().csv(rows));
+  out.writeText("parameters.csv", parameterSection("cause").csv(parameters));
 }
 
 }  // namespace demfem::campaign

@@ -115,9 +115,4 @@ double chi2(const std::vector<Residual>& residuals) {
   return sum;
 }
 
-nlohmann::json toJson(const Residual& r) {
-  return {{"case", r.key.label()}, {"quantity", r.quantity}, {"measured", r.measured}, {"simulated", r.simulated},
-          {"sigma", r.sigma},      {"normalized", r.normalized}, {"missing", r.missing}};
-}
-
 }  // namespace demfem::campaign

@@ -1,6 +1,12 @@
+// Outputs of a staged calibration (calibration.hpp): calibrated_study.json, report.md, the tables
+// stages.csv, parameters.csv and residuals.csv (report sections: each column declared once, the
+// Markdown tables and the JSON document generated from the same declaration) and the plots.
 #include "demfem/campaign/calibration.hpp"
 
+#include "demfem/analysis/report_section.hpp"
 #include "demfem/analysis/step_fit.hpp"
+
+#include "parameter_section.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,46 +16,106 @@
 namespace demfem::campaign {
 namespace {
 
-nlohmann::json optionalNumber(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+using namespace analysis::report;
 
-nlohmann::json finiteOrNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+// One stage of a calibration (its number from 1).
+struct StageRow {
+  long long number;
+  const Stage* stage;
+  const CalibrationResult* result;
+};
 
-nlohmann::json residualsJson(const std::vector<Residual>& residuals) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const auto& r : residuals) out.push_back(toJson(r));
-  return out;
+// One quantity of one case of a stage, at the study's own values and at the fit (the same measured
+// quantities, so the two residual lists pair up by index).
+struct ResidualRow {
+  long long stage;
+  const Residual* initial;
+  const Residual* fitted;
+};
+
+// stages.csv: chi2, uniqueness, runs and wall time of each stage (the report's prose under its tables).
+const Section<StageRow>& stageSection() {
+  using R = StageRow;
+  static const Section<R> section{
+      {{"stage", [](const R& r) -> CellValue { return r.number; }},
+       {"title", [](const R& r) -> CellValue { return r.stage->title; }},
+       {"initial_chi2", [](const R& r) -> CellValue { return r.result->initial_chi2; }},
+       {"chi2", [](const R& r) -> CellValue { return r.result->chi2; }},
+       {"quantities", [](const R& r) -> CellValue { return static_cast<long long>(r.result->residuals.size()); }},
+       {"unique", [](const R& r) -> CellValue { return r.result->minima.size() == 1; }},
+       {"distinct_minima", [](const R& r) -> CellValue { return static_cast<long long>(r.result->minima.size()); }},
+       {"evaluations", [](const R& r) -> CellValue { return static_cast<long long>(r.result->evaluations); }},
+       {"model_runs", [](const R& r) -> CellValue { return static_cast<long long>(r.result->model_runs); }},
+       {"cache_hits", [](const R& r) -> CellValue { return static_cast<long long>(r.result->cache_hits); }},
+       {"failed_runs", [](const R& r) -> CellValue { return static_cast<long long>(r.result->failed_runs); }},
+       {"wall_time_s", [](const R& r) -> CellValue { return r.result->wall_time_s; }}},
+      [](const R& r) { return r.stage->title; },
+      {}};
+  return section;
 }
 
-nlohmann::json stageJson(const Stage& stage, const CalibrationResult& r) {
-  nlohmann::json parameters = nlohmann::json::array();
-  for (const auto& p : r.parameters)
-    parameters.push_back({{"pointer", p.spec.pointer},
-                          {"lo", p.spec.lo},
-                          {"hi", p.spec.hi},
-                          {"log", p.spec.log},
-                          {"initial", p.initial},
-                          {"value", optionalNumber(p.value)},
-                          {"std_dev", finiteOrNull(p.std_dev)},
-                          {"identified", p.identified},
-                          {"best_point", p.best}});
+// residuals.csv: per stage, case and quantity the measured value and its sigma, the simulated value
+// and the residual (simulated - measured) / sigma at the study's own values and at the fit.
+const Section<ResidualRow>& residualSection() {
+  using R = ResidualRow;
+  static const Section<R> section{
+      {{"stage", [](const R& r) -> CellValue { return r.stage; }},
+       {"case", [](const R& r) -> CellValue { return r.fitted->key.label(); }},
+       {"quantity", [](const R& r) -> CellValue { return r.fitted->quantity; }},
+       {"measured", [](const R& r) -> CellValue { return r.fitted->measured; }},
+       {"sigma", [](const R& r) -> CellValue { return r.fitted->sigma; }},
+       {"initial_simulated", [](const R& r) -> CellValue { return r.initial->simulated; }},
+       {"initial_normalized", [](const R& r) -> CellValue { return r.initial->normalized; }},
+       {"initial_missing", [](const R& r) -> CellValue { return r.initial->missing; }},
+       {"simulated", [](const R& r) -> CellValue { return r.fitted->simulated; }},
+       {"normalized", [](const R& r) -> CellValue { return r.fitted->normalized; }},
+       {"missing", [](const R& r) -> CellValue { return r.fitted->missing; }}},
+      [](const R& r) { return r.fitted->key.title(); },
+      {{"quantity", md::text("quantity")},
+       {"measured", md::number("measured", 6)},
+       {"sigma", md::number("sigma", 6)},
+       {"initial", md::number("initial_simulated", 6)},
+       {"calibrated", md::number("simulated", 6)},
+       {"residual (sigma)", md::number("normalized", 6)}}};
+  return section;
+}
+
+std::vector<StageRow> stageRows(const StagedCalibration& c) {
+  std::vector<StageRow> rows;
+  for (std::size_t i = 0; i < c.results.size(); ++i) rows.push_back({static_cast<long long>(i + 1), &c.stages[i], &c.results[i]});
+  return rows;
+}
+
+std::vector<ResidualRow> residualRows(const StageRow& stage) {
+  std::vector<ResidualRow> rows;
+  const CalibrationResult& r = *stage.result;
+  for (std::size_t i = 0; i < r.residuals.size(); ++i) rows.push_back({stage.number, &r.initial_residuals[i], &r.residuals[i]});
+  return rows;
+}
+
+// Every stage's rows of a table, one after another (the CSV files).
+template <class Row, class RowsOf>
+std::vector<Row> allStages(const std::vector<StageRow>& stages, RowsOf rows_of) {
+  std::vector<Row> all;
+  for (const StageRow& s : stages)
+    for (const Row& row : rows_of(s)) all.push_back(row);
+  return all;
+}
+
+std::vector<ParameterRow> stageParameterRows(const StageRow& stage) { return parameterRows(stage.number, stage.result->parameters); }
+
+nlohmann::json stageJson(const StageRow& stage) {
+  const CalibrationResult& r = *stage.result;
   nlohmann::json minima = nlohmann::json::array();
   for (const auto& m : r.minima) minima.push_back({{"values", m.values}, {"chi2", m.chi2}});
   nlohmann::json cases = nlohmann::json::array();
-  for (const auto& key : stage.cases) cases.push_back(key.label());
-  return {{"title", stage.title},
-          {"cases", cases},
-          {"parameters", parameters},
-          {"initial_chi2", r.initial_chi2},
-          {"chi2", r.chi2},
-          {"residuals_initial", residualsJson(r.initial_residuals)},
-          {"residuals", residualsJson(r.residuals)},
-          {"minima", minima},
-          {"unique", r.minima.size() == 1},
-          {"evaluations", r.evaluations},
-          {"model_runs", r.model_runs},
-          {"failed_runs", r.failed_runs},
-          {"cache_hits", r.cache_hits},
-          {"wall_time_s", r.wall_time_s}};
+  for (const auto& key : stage.stage->cases) cases.push_back(key.label());
+  nlohmann::json j = stageSection().json(stage);
+  j["cases"] = cases;
+  j["parameters"] = parameterSection("stage").json(stageParameterRows(stage));
+  j["residuals"] = residualSection().json(residualRows(stage));
+  j["minima"] = minima;
+  return j;
 }
 
 std::string number(double v) {
@@ -72,41 +138,42 @@ std::string objectiveText(const CalibrationOptions& o) {
          " of the best and more than 3 sigma away from it.\n";
 }
 
-std::string residualTable(const std::vector<Residual>& initial, const std::vector<Residual>& fitted) {
-  std::string s = "| case | quantity | measured | sigma | initial | calibrated | residual (sigma) |\n|---|---|---|---|---|---|---|\n";
-  for (std::size_t i = 0; i < fitted.size(); ++i)
-    s += "| " + fitted[i].key.title() + " | " + fitted[i].quantity + " | " + number(fitted[i].measured) + " | " + number(fitted[i].sigma) +
-         " | " + number(initial[i].simulated) + " | " + number(fitted[i].simulated) + " | " + number(fitted[i].normalized) + " |\n";
+// The sentence on a parameter that the recordings do not identify.
+std::string unidentifiedNote(const RowValues& p) {
+  return "\n`" + csvText(p["pointer"]) + "` is not identified by these recordings (the objective is flat along it within the noise); "
+         "the calibrated study carries the best point found, " + shortNum(p.number("best_point"), 6) + ", one of many that fit equally well.\n";
+}
+
+// The distinct minima of a stage (values in the order of its parameters).
+std::string minimaText(const CalibrationResult& r) {
+  std::string s;
+  for (const auto& m : r.minima) {
+    s += "- chi2 " + number(m.chi2) + ":";
+    for (std::size_t i = 0; i < m.values.size(); ++i) {
+      s += ' ';  // (" " + label trips GCC 12's false -Wrestrict positive)
+      s += r.parameters[i].spec.label() + " = " + number(m.values[i]);
+    }
+    s += "\n";
+  }
   return s;
 }
 
-std::string stageReport(const Stage& stage, const CalibrationResult& r, const std::vector<std::string>& plots) {
-  std::string s = "## " + stage.title + "\n\n| parameter | initial | fitted | std dev | bounds |\n|---|---|---|---|---|\n";
-  for (const auto& p : r.parameters)
-    s += "| `" + p.spec.pointer + "` | " + number(p.initial) + " | " + (p.value ? number(*p.value) : std::string("unidentified")) + " | " +
-         number(p.std_dev) + " | " + number(p.spec.lo) + " - " + number(p.spec.hi) +
-         (p.spec.log ? " (log)" : "") + " |\n";
-  for (const auto& p : r.parameters)
-    if (!p.identified)
-      s += "\n`" + p.spec.pointer + "` is not identified by these recordings (the objective is flat along it within the noise); "
-           "the calibrated study carries the best point found, " + number(p.best) + ", one of many that fit equally well.\n";
-  s += "\nchi2 " + number(r.initial_chi2) + " -> " + number(r.chi2) + " over " + std::to_string(r.residuals.size()) + " quantities. ";
-  if (r.minima.size() == 1) {
-    s += "Unique: every start ended at the same minimum or one clearly worse.\n";
-  } else {
-    s += "NOT unique: " + std::to_string(r.minima.size()) + " distinct minima fit within the noise:\n\n";
-    for (const auto& m : r.minima) {
-      s += "- chi2 " + number(m.chi2) + ":";
-      for (std::size_t i = 0; i < m.values.size(); ++i) {
-        s += ' ';  // (" " + label trips GCC 12's false -Wrestrict positive)
-        s += r.parameters[i].spec.label() + " = " + number(m.values[i]);
-      }
-      s += "\n";
-    }
+std::string stageReport(const StageRow& stage, const std::vector<std::string>& plots) {
+  const Section<ParameterRow> parameters = parameterSection("stage");
+  const std::vector<ParameterRow> parameter_rows = stageParameterRows(stage);
+  std::string s = "## " + stage.stage->title + "\n\n" + parameters.markdownOf(parameter_rows);
+  for (const ParameterRow& p : parameter_rows) {
+    const RowValues v = parameters.values(p);
+    if (!v.flag("identified")) s += unidentifiedNote(v);
   }
-  s += "\nModel runs " + std::to_string(r.model_runs) + " (cache hits " + std::to_string(r.cache_hits) + ", failed DEM runs " +
-       std::to_string(r.failed_runs) + "), objective evaluations " +
-       std::to_string(r.evaluations) + ", wall time " + number(r.wall_time_s) + " s.\n\n" + residualTable(r.initial_residuals, r.residuals);
+  const RowValues v = stageSection().values(stage);
+  const auto count = [&v](const char* column) { return csvText(v[column]); };
+  s += "\nchi2 " + shortNum(v.number("initial_chi2"), 6) + " -> " + shortNum(v.number("chi2"), 6) + " over " + count("quantities") + " quantities. ";
+  s += v.flag("unique") ? std::string("Unique: every start ended at the same minimum or one clearly worse.\n")
+                        : "NOT unique: " + count("distinct_minima") + " distinct minima fit within the noise:\n\n" + minimaText(*stage.result);
+  s += "\nModel runs " + count("model_runs") + " (cache hits " + count("cache_hits") + ", failed DEM runs " + count("failed_runs") +
+       "), objective evaluations " + count("evaluations") + ", wall time " + shortNum(v.number("wall_time_s"), 6) + " s.\n\n" +
+       residualSection().markdownOf(residualRows(stage));
   for (const auto& p : plots) s += "\n![" + p + "](" + p + ")\n";
   return s + "\n";
 }
@@ -180,18 +247,19 @@ analysis::Figure caseFigure(const analysis::CaseKey& key, const CalibrationResul
 }  // namespace
 
 nlohmann::json toJson(const StagedCalibration& c, const CalibrationOptions& options) {
+  const std::vector<StageRow> rows = stageRows(c);
   nlohmann::json stages = nlohmann::json::array();
   int runs = 0, hits = 0, evaluations = 0;
   double wall = 0;
-  for (std::size_t i = 0; i < c.results.size(); ++i) {
-    stages.push_back(stageJson(c.stages[i], c.results[i]));
-    runs += c.results[i].model_runs, hits += c.results[i].cache_hits, evaluations += c.results[i].evaluations;
-    wall += c.results[i].wall_time_s;
+  for (const StageRow& row : rows) {
+    stages.push_back(stageJson(row));
+    runs += row.result->model_runs, hits += row.result->cache_hits, evaluations += row.result->evaluations;
+    wall += row.result->wall_time_s;
   }
+  // Per pointer, the last stage's fit of it (the value the calibrated study carries).
   nlohmann::json fitted = nlohmann::json::object();
-  for (const auto& r : c.results)
-    for (const auto& p : r.parameters)
-      fitted[p.spec.pointer] = {{"value", optionalNumber(p.value)}, {"std_dev", finiteOrNull(p.std_dev)}, {"identified", p.identified}};
+  for (const nlohmann::json& p : parameterSection("stage").json(allStages<ParameterRow>(rows, stageParameterRows)))
+    fitted[p.at("pointer").get<std::string>()] = {{"value", p.at("value")}, {"std_dev", p.at("std_dev")}, {"identified", p.at("identified")}};
   return {{"objective", objectiveText(options)},
           {"fitted", fitted},
           {"stages", stages},
@@ -204,19 +272,23 @@ nlohmann::json toJson(const StagedCalibration& c, const CalibrationOptions& opti
 void writeCalibration(const StagedCalibration& c, const CalibrationOptions& options, analysis::StagedOutput& out,
                       const analysis::GnuplotRenderer* renderer) {
   out.writeText("calibrated_study.json", c.calibrated_study.dump(2) + "\n");
+  const std::vector<StageRow> rows = stageRows(c);
   std::string report = "# Calibration report\n\nObjective: " + objectiveText(options) + "\n";
   if (!renderer) report += "Plots were not drawn (--no-plots).\n\n";
-  for (std::size_t i = 0; i < c.results.size(); ++i) {
+  for (const StageRow& row : rows) {
     std::vector<std::string> plots;
     if (renderer)
-      for (const auto& key : casesOfResult(c.results[i])) {
-        const std::string name = "plots/stage" + std::to_string(i + 1) + "_" + key.label();
-        renderer->render(caseFigure(key, c.results[i], options.objective.analysis), out.stage(name + ".gp"), out.stage(name + ".svg"));
+      for (const auto& key : casesOfResult(*row.result)) {
+        const std::string name = "plots/stage" + std::to_string(row.number) + "_" + key.label();
+        renderer->render(caseFigure(key, *row.result, options.objective.analysis), out.stage(name + ".gp"), out.stage(name + ".svg"));
         plots.push_back(name + ".svg");
       }
-    report += stageReport(c.stages[i], c.results[i], plots);
+    report += stageReport(row, plots);
   }
   out.writeText("report.md", report);
+  out.writeText("stages.csv", stageSection().csv(rows));
+  out.writeText("parameters.csv", parameterSection("stage").csv(allStages<ParameterRow>(rows, stageParameterRows)));
+  out.writeText("residuals.csv", residualSection().csv(allStages<ResidualRow>(rows, residualRows)));
   out.writeText("calibration.json", toJson(c, options).dump(2) + "\n");
 }
 

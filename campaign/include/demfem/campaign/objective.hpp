@@ -70,6 +70,4 @@ std::vector<Residual> residuals(const std::vector<Quantity>& measured, const std
 
 double chi2(const std::vector<Residual>& residuals);
 
-nlohmann::json toJson(const Residual& residual);
-
 }  // namespace demfem::campaign
