@@ -131,6 +131,12 @@ MarkdownCell onlyIf(const std::string& flag_column, MarkdownCell cell, std::stri
   };
 }
 
+MarkdownCell ifDefined(const std::string& number_column, MarkdownCell cell, std::string otherwise) {
+  return [number_column, cell = std::move(cell), otherwise = std::move(otherwise)](const RowValues& v) {
+    return std::isfinite(v.number(number_column)) ? cell(v) : otherwise;
+  };
+}
+
 }  // namespace md
 
 std::string markdownTable(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {

@@ -103,7 +103,18 @@ std::optional<double> slope(const std::vector<double>& x, const std::vector<doub
   return sxy / sxx;
 }
 
-nlohmann::json estimateJson(const Estimate& e) { return {{"value", e.value}, {"std_error", e.std_error}}; }
+using namespace report;
+
+// "value +- standard error" of the columns NAME and NAME_std_error.
+MarkdownCell estimateCell(const std::string& name) {
+  return md::concat({md::number(name), md::literal(" +- "), md::number(name + "_std_error", 2)});
+}
+
+// The columns NAME and NAME_std_error of an estimate.
+void addEstimate(std::vector<Column<WeightDropSignature>>& columns, const std::string& name, Estimate WeightDropSignature::*estimate) {
+  columns.push_back({name, [estimate](const WeightDropSignature& w) -> CellValue { return (w.*estimate).value; }});
+  columns.push_back({name + "_std_error", [estimate](const WeightDropSignature& w) -> CellValue { return (w.*estimate).std_error; }});
+}
 
 }  // namespace
 
@@ -121,18 +132,54 @@ Signatures signaturesOf(const ComparisonResult& comparison, const SignatureSetti
   return s;
 }
 
+const Section<WeightDropSignature>& weightDropSignatureSection() {
+  using R = WeightDropSignature;
+  static const Section<R> section = [] {
+    std::vector<Column<R>> c{{"case", [](const R& w) -> CellValue { return w.key.label(); }},
+                             {"mass_kg", [](const R& w) -> CellValue { return w.key.mass_kg; }}};
+    addEstimate(c, "force_ratio", &R::force_ratio);
+    addEstimate(c, "deformation_ratio", &R::deformation_ratio);
+    c.push_back({"force_per_weight_measured_N_per_kg", [](const R& w) -> CellValue { return w.force_per_weight_measured_N_per_kg; }});
+    c.push_back({"force_per_weight_simulated_N_per_kg", [](const R& w) -> CellValue { return w.force_per_weight_simulated_N_per_kg; }});
+    addEstimate(c, "frequency_ratio", &R::frequency_ratio);
+    addEstimate(c, "damping_ratio_difference", &R::damping_difference);
+    return Section<R>{std::move(c),
+                      [](const R& w) { return shortNum(w.key.mass_kg) + " kg"; },
+                      {{"force ratio", estimateCell("force_ratio")},
+                       {"deformation ratio", estimateCell("deformation_ratio")},
+                       {"force per weight meas / sim (N/kg)", md::concat({md::number("force_per_weight_measured_N_per_kg"), md::literal(" / "),
+                                                                          md::number("force_per_weight_simulated_N_per_kg")})},
+                       {"frequency ratio", estimateCell("frequency_ratio")},
+                       {"damping ratio difference", estimateCell("damping_ratio_difference")}},
+                      "weight"};
+  }();
+  return section;
+}
+
+const Section<SoilBinSignature>& soilBinSignatureSection() {
+  using R = SoilBinSignature;
+  static const Section<R> section{
+      {{"case", [](const R& b) -> CellValue { return b.key.label(); }},
+       {"depth_mm", [](const R& b) -> CellValue { return b.key.depth_mm; }},
+       {"force_bias_percent", [](const R& b) -> CellValue { return b.force_bias_percent; }},
+       {"deformation_bias_percent", [](const R& b) -> CellValue { return b.deformation_bias_percent; }},
+       {"end_rise_difference", [](const R& b) -> CellValue { return b.end_rise_difference; }},
+       {"fluctuation_ratio", [](const R& b) -> CellValue { return b.fluctuation_ratio; }},
+       {"spectral_slope_measured", [](const R& b) -> CellValue { return b.spectral_slope_measured; }},
+       {"spectral_slope_simulated", [](const R& b) -> CellValue { return b.spectral_slope_simulated; }}},
+      [](const R& b) { return shortNum(b.key.depth_mm) + " mm"; },
+      {{"force bias (%)", md::number("force_bias_percent")},
+       {"deformation bias (%)", md::number("deformation_bias_percent")},
+       {"end rise sim - meas", md::number("end_rise_difference")},
+       {"fluctuation ratio", md::number("fluctuation_ratio")},
+       {"spectral slope meas / sim", md::concat({md::number("spectral_slope_measured"), md::literal(" / "), md::number("spectral_slope_simulated")})}},
+      "depth"};
+  return section;
+}
+
 nlohmann::json toJson(const Signatures& s) {
   nlohmann::json j;
-  j["weight_drops"] = nlohmann::json::array();
-  for (const WeightDropSignature& w : s.weight_drops)
-    j["weight_drops"].push_back({{"case", w.key.label()},
-                                 {"mass_kg", w.key.mass_kg},
-                                 {"force_ratio", estimateJson(w.force_ratio)},
-                                 {"deformation_ratio", estimateJson(w.deformation_ratio)},
-                                 {"force_per_weight_measured_N_per_kg", w.force_per_weight_measured_N_per_kg},
-                                 {"force_per_weight_simulated_N_per_kg", w.force_per_weight_simulated_N_per_kg},
-                                 {"frequency_ratio", estimateJson(w.frequency_ratio)},
-                                 {"damping_ratio_difference", estimateJson(w.damping_difference)}});
+  j["weight_drops"] = weightDropSignatureSection().json(s.weight_drops);
   if (s.weight_relations.defined)
     j["weight_relations"] = {{"force_ratio_change", s.weight_relations.force_ratio_change},
                              {"deformation_ratio_change", s.weight_relations.deformation_ratio_change},
@@ -140,16 +187,7 @@ nlohmann::json toJson(const Signatures& s) {
                              {"stiffness_consistency", s.weight_relations.stiffness_consistency}};
   else
     j["weight_relations"] = nullptr;
-  j["soil_bins"] = nlohmann::json::array();
-  for (const SoilBinSignature& b : s.soil_bins)
-    j["soil_bins"].push_back({{"case", b.key.label()},
-                              {"depth_mm", b.key.depth_mm},
-                              {"force_bias_percent", b.force_bias_percent},
-                              {"deformation_bias_percent", b.deformation_bias_percent},
-                              {"end_rise_difference", b.end_rise_difference},
-                              {"fluctuation_ratio", b.fluctuation_ratio},
-                              {"spectral_slope_measured", b.spectral_slope_measured},
-                              {"spectral_slope_simulated", b.spectral_slope_simulated}});
+  j["soil_bins"] = soilBinSignatureSection().json(s.soil_bins);
   j["force_bias_per_depth_percent_per_mm"] =
       s.force_bias_per_depth_percent_per_mm ? nlohmann::json(*s.force_bias_per_depth_percent_per_mm) : nlohmann::json(nullptr);
   return j;

@@ -139,14 +139,7 @@ analysis::Figure caseFigure(const analysis::Recording& measured, const analysis:
 std::string signatureTable(const analysis::Signatures& s) {
   std::string md;
   if (!s.weight_drops.empty()) {
-    md += "| weight | force ratio | deformation ratio | force per weight meas / sim (N/kg) | frequency ratio | damping ratio difference |\n"
-          "| --- | --- | --- | --- | --- | --- |\n";
-    for (const auto& w : s.weight_drops)
-      md += "| " + number(w.key.mass_kg) + " kg | " + number(w.force_ratio.value) + " +- " + number(w.force_ratio.std_error, 2) + " | " +
-            number(w.deformation_ratio.value) + " +- " + number(w.deformation_ratio.std_error, 2) + " | " +
-            number(w.force_per_weight_measured_N_per_kg) + " / " + number(w.force_per_weight_simulated_N_per_kg) + " | " +
-            number(w.frequency_ratio.value) + " +- " + number(w.frequency_ratio.std_error, 2) + " | " + number(w.damping_difference.value) +
-            " +- " + number(w.damping_difference.std_error, 2) + " |\n";
+    md += analysis::weightDropSignatureSection().markdownOf(s.weight_drops);
     if (s.weight_relations.defined)
       md += "\nAcross the weights (heaviest minus lightest): force ratio " + number(s.weight_relations.force_ratio_change) +
             ", deformation ratio " + number(s.weight_relations.deformation_ratio_change) + ", damping difference " +
@@ -154,12 +147,7 @@ std::string signatureTable(const analysis::Signatures& s) {
             number(s.weight_relations.stiffness_consistency) + " (1 for a pure stiffness error).\n";
   }
   if (!s.soil_bins.empty()) {
-    md += "\n| depth | force bias (%) | deformation bias (%) | end rise sim - meas | fluctuation ratio | spectral slope meas / sim |\n"
-          "| --- | --- | --- | --- | --- | --- |\n";
-    for (const auto& b : s.soil_bins)
-      md += "| " + number(b.key.depth_mm) + " mm | " + number(b.force_bias_percent) + " | " + number(b.deformation_bias_percent) + " | " +
-            number(b.end_rise_difference) + " | " + number(b.fluctuation_ratio) + " | " + number(b.spectral_slope_measured) + " / " +
-            number(b.spectral_slope_simulated) + " |\n";
+    md += "\n" + analysis::soilBinSignatureSection().markdownOf(s.soil_bins);
     if (s.force_bias_per_depth_percent_per_mm) md += "\nForce bias against depth: " + number(*s.force_bias_per_depth_percent_per_mm) + " % per mm.\n";
   }
   return md;
@@ -235,6 +223,8 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   std::vector<ParameterRow> parameters;
   for (const CauseRow& row : rows)
     for (const ParameterRow& p : causeParameterRows(row)) parameters.push_back(p);
+  out.writeText("weight_signatures.csv", analysis::weightDropSignatureSection().csv(d.signatures.weight_drops));
+  out.writeText("soil_signatures.csv", analysis::soilBinSignatureSection().csv(d.signatures.soil_bins));
   out.writeText("ranking.csv", rankingSection().csv(rows));
   out.writeText("parameters.csv", parameterSection("cause").csv(parameters));
 }

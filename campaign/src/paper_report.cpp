@@ -4,13 +4,12 @@
 
 #include "demfem/analysis/evaluation.hpp"
 #include "demfem/analysis/recording.hpp"
+#include "demfem/analysis/report_section.hpp"
 #include "demfem/analysis/spectrum.hpp"
 #include "demfem/backends/physics/time_step.hpp"
 #include "demfem/study/tool_motion.hpp"
 #include "demfem/campaign/paper_campaign.hpp"
 #include "demfem/campaign/parameters.hpp"
-
-#include "paper_format.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -78,59 +77,152 @@ std::vector<ReportCase> collect(const std::vector<fs::path>& files, const Report
   return cases;
 }
 
-std::string range(const std::pair<double, double>& r) { return formatNumber("%.2f", r.first) + "-" + formatNumber("%.2f", r.second); }
+using namespace analysis::report;
 
-std::string caseTable(const std::vector<ReportCase>& cases) {
-  std::ostringstream md;
-  md << "| case | tool | model | depth mm | velocity mm/s (paper) | run | stroke mm | window mm | force N (mean ± sd) | "
-        "deformation mm (mean ± sd) | FFT fit A = a f^b |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const ReportCase& c : cases) {
-    const auto& m = c.study.tools.front().motion;
-    md << "| " << c.name << " | " << c.study.tools.front().name << " | " << kindName(c.study.kind) << " | " << formatNumber("%.0f", m.depth_m * 1e3)
-       << " | " << formatNumber("%.2f", m.velocity_m_s * 1e3) << " (" << (c.paper ? formatNumber("%.2f", c.paper->velocity_mm_s) : "-") << ") | ";
-    if (!c.run) {
-      md << "not finished | | | | | |\n";
-      continue;
-    }
-    const Evaluated& e = *c.run;
-    md << "finished | " << formatNumber("%.0f", e.stroke_mm) << " | " << formatNumber("%.0f", e.window_begin_mm) << "-" << formatNumber("%.0f", e.window_end_mm) << " | "
-       << formatNumber("%.3g", e.window.force_N.mean) << " ± " << formatNumber("%.2g", e.window.force_N.std_dev) << " | "
-       << formatNumber("%.3g", e.window.deformation_mm.mean) << " ± " << formatNumber("%.2g", e.window.deformation_mm.std_dev) << " | " << e.fit_signal
-       << ": a = " << formatNumber("%.3g", e.fit.a) << ", b = " << formatNumber("%.3f", e.fit.b) << " ± " << formatNumber("%.2f", e.fit.b_std_error) << " |\n";
-  }
-  return md.str();
+using Case = const ReportCase*;
+
+// A number of a finished run; absent for a case not finished.
+CellValue ofRun(Case c, double Evaluated::*field) { return c->run ? std::optional<double>((*c->run).*field) : std::nullopt; }
+
+// An end of an optional range: `first` the lower one.
+CellValue rangeEnd(const std::optional<std::pair<double, double>>& range, bool first) {
+  return range ? std::optional<double>(first ? range->first : range->second) : std::nullopt;
 }
 
-std::string tiltTable(const std::vector<ReportCase>& cases) {
-  std::ostringstream md;
-  md << "| case | paper measured deg | paper simulated deg | ours deg (tilt window) | ours - paper simulated (midpoints) deg |\n"
-        "|---|---|---|---|---|\n";
-  for (const ReportCase& c : cases) {
-    if (!c.paper || !c.paper->simulated_tilt_deg) continue;
-    const auto& p = *c.paper->simulated_tilt_deg;
-    md << "| " << c.name << " | " << (c.paper->measured_tilt_deg ? range(*c.paper->measured_tilt_deg) : "-") << " | " << range(p) << " | ";
-    if (c.run && c.run->tilt_range_deg) {
-      const auto& o = *c.run->tilt_range_deg;
-      md << range(o) << " (" << formatNumber("%.0f", c.run->tilt_begin_mm) << "-" << formatNumber("%.0f", c.run->tilt_end_mm) << " mm) | "
-         << formatNumber("%+.2f", (o.first + o.second) / 2 - (p.first + p.second) / 2) << " |\n";
-    } else {
-      md << "not finished | |\n";
-    }
-  }
-  return md.str();
+// The paper's tilt range of a case (Section 3), measured or simulated.
+CellValue paperTilt(Case c, std::optional<std::pair<double, double>> PaperCase::*range, bool first) {
+  return c->paper ? rangeEnd(c->paper->*range, first) : std::nullopt;
 }
 
-std::string hoursTable(const std::vector<ReportCase>& cases) {
-  std::ostringstream md;
-  md << "| case | paper h (8-core i7-9700) | ours: run wall time | ours: full scale, projected h | ours / paper |\n|---|---|---|---|---|\n";
-  for (const ReportCase& c : cases) {
-    const double projected_s = c.run && c.run->run_estimate_s > 0 ? c.full_estimate_s * c.run->wall_s / c.run->run_estimate_s : c.full_estimate_s;
-    md << "| " << c.name << " | " << (c.paper ? formatNumber("%.0f", c.paper->hours) : "-") << " | "
-       << (c.run ? formatNumber("%.0f s", c.run->wall_s) + " (" + formatNumber("%.0f", c.run->stroke_mm) + " mm stroke)" : std::string("not finished")) << " | "
-       << formatNumber("%.1f", projected_s / 3600) << (c.run ? " (measured cost)" : " (estimate)") << " | "
-       << (c.paper ? formatNumber("%.2f", projected_s / 3600 / c.paper->hours) : "-") << " |\n";
-  }
-  return md.str();
+std::optional<std::pair<double, double>> runTilt(Case c) { return c->run ? c->run->tilt_range_deg : std::nullopt; }
+
+// The full-scale wall time: the estimate scaled by measured / estimated of the run itself.
+double projectedSeconds(Case c) {
+  return c->run && c->run->run_estimate_s > 0 ? c->full_estimate_s * c->run->wall_s / c->run->run_estimate_s : c->full_estimate_s;
+}
+
+// Our tilt range's midpoint minus the paper's simulated one's.
+CellValue tiltAgainstPaper(Case c) {
+  const auto ours = runTilt(c);
+  if (!ours || !c->paper || !c->paper->simulated_tilt_deg) return std::nullopt;
+  const auto& p = *c->paper->simulated_tilt_deg;
+  return std::optional<double>((ours->first + ours->second) / 2 - (p.first + p.second) / 2);
+}
+
+// "lo-hi" of two columns in %.2f.
+MarkdownCell rangeCell(const std::string& lo, const std::string& hi) {
+  return md::concat({md::format(lo, "%.2f"), md::literal("-"), md::format(hi, "%.2f")});
+}
+
+MarkdownCell ifFinished(MarkdownCell cell) { return md::onlyIf("finished", std::move(cell), ""); }
+
+// paper-cases.csv and the JSON's `cases`: one row per case, every table of the report a view of it.
+const Section<Case>& caseSection() {
+  using R = Case;
+  static const Section<R> section{
+      {{"name", [](R c) -> CellValue { return c->name; }},
+       {"tool", [](R c) -> CellValue { return c->study.tools.front().name; }},
+       {"model", [](R c) -> CellValue { return kindName(c->study.kind); }},
+       {"depth_mm", [](R c) -> CellValue { return c->study.tools.front().motion.depth_m * 1e3; }},
+       {"velocity_mm_s", [](R c) -> CellValue { return c->study.tools.front().motion.velocity_m_s * 1e3; }},
+       {"paper_velocity_mm_s", [](R c) -> CellValue { return c->paper ? std::optional<double>(c->paper->velocity_mm_s) : std::nullopt; }},
+       {"dem_step_s", [](R c) -> CellValue { return study::demStepDividing(physics::demTimeStep(c->study).step_s, c->study.fem.dt_s); }},
+       {"critical_step_s", [](R c) -> CellValue { return physics::demTimeStep(c->study).critical_s; }},
+       {"dem_step_why", [](R c) -> CellValue { return physics::demTimeStep(c->study).why; }},
+       {"finished", [](R c) -> CellValue { return c->run.has_value(); }},
+       {"stroke_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::stroke_mm); }},
+       {"window_begin_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::window_begin_mm); }},
+       {"window_end_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::window_end_mm); }},
+       {"force_mean_N", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.force_N.mean) : std::nullopt; }},
+       {"force_std_N", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.force_N.std_dev) : std::nullopt; }},
+       {"deformation_mean_mm",
+        [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.deformation_mm.mean) : std::nullopt; }},
+       {"deformation_std_mm",
+        [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.deformation_mm.std_dev) : std::nullopt; }},
+       {"fit_signal", [](R c) -> CellValue { return c->run ? c->run->fit_signal : std::string(); }},
+       {"fit_a", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->fit.a) : std::nullopt; }},
+       {"fit_b", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->fit.b) : std::nullopt; }},
+       {"fit_b_std_error", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->fit.b_std_error) : std::nullopt; }},
+       {"paper_measured_tilt_min_deg", [](R c) { return paperTilt(c, &PaperCase::measured_tilt_deg, true); }},
+       {"paper_measured_tilt_max_deg", [](R c) { return paperTilt(c, &PaperCase::measured_tilt_deg, false); }},
+       {"paper_simulated_tilt_min_deg", [](R c) { return paperTilt(c, &PaperCase::simulated_tilt_deg, true); }},
+       {"paper_simulated_tilt_max_deg", [](R c) { return paperTilt(c, &PaperCase::simulated_tilt_deg, false); }},
+       {"tilt_begin_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::tilt_begin_mm); }},
+       {"tilt_end_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::tilt_end_mm); }},
+       {"tilt_min_deg", [](R c) { return rangeEnd(runTilt(c), true); }},
+       {"tilt_max_deg", [](R c) { return rangeEnd(runTilt(c), false); }},
+       {"tilt_minus_paper_simulated_deg", [](R c) { return tiltAgainstPaper(c); }},
+       {"paper_hours", [](R c) -> CellValue { return c->paper ? std::optional<double>(c->paper->hours) : std::nullopt; }},
+       {"wall_time_s", [](R c) -> CellValue { return ofRun(c, &Evaluated::wall_s); }},
+       {"run_estimate_s", [](R c) -> CellValue { return ofRun(c, &Evaluated::run_estimate_s); }},
+       {"full_scale_estimate_s", [](R c) -> CellValue { return c->full_estimate_s; }},
+       {"projected_full_scale_h", [](R c) -> CellValue { return projectedSeconds(c) / 3600; }},
+       {"projected_over_paper",
+        [](R c) -> CellValue { return c->paper ? std::optional<double>(projectedSeconds(c) / 3600 / c->paper->hours) : std::nullopt; }}},
+      [](R c) { return c->name; },
+      {{"tool", md::text("tool")},
+       {"model", md::text("model")},
+       {"depth mm", md::format("depth_mm", "%.0f")},
+       {"velocity mm/s (paper)",
+        md::concat({md::format("velocity_mm_s", "%.2f"), md::literal(" ("), md::format("paper_velocity_mm_s", "%.2f"), md::literal(")")})},
+       {"run", md::onlyIf("finished", md::literal("finished"), "not finished")},
+       {"stroke mm", ifFinished(md::format("stroke_mm", "%.0f"))},
+       {"window mm", ifFinished(md::concat({md::format("window_begin_mm", "%.0f"), md::literal("-"), md::format("window_end_mm", "%.0f")}))},
+       {"force N (mean ± sd)", ifFinished(md::concat({md::format("force_mean_N", "%.3g"), md::literal(" ± "), md::format("force_std_N", "%.2g")}))},
+       {"deformation mm (mean ± sd)",
+        ifFinished(md::concat({md::format("deformation_mean_mm", "%.3g"), md::literal(" ± "), md::format("deformation_std_mm", "%.2g")}))},
+       {"FFT fit A = a f^b", ifFinished(md::concat({md::text("fit_signal"), md::literal(": a = "), md::format("fit_a", "%.3g"), md::literal(", b = "),
+                                                   md::format("fit_b", "%.3f"), md::literal(" ± "), md::format("fit_b_std_error", "%.2f")}))}}};
+  return section;
+}
+
+// The time step of each case (a view of caseSection()).
+const std::vector<MarkdownColumn>& timeStepView() {
+  static const std::vector<MarkdownColumn> view{{"DEM step s", md::format("dem_step_s", "%.3g")},
+                                                {"critical step s", md::format("critical_step_s", "%.3g")},
+                                                {"why", md::text("dem_step_why")}};
+  return view;
+}
+
+// Section 3's tilt of the PMMA tool beside the paper's (a view of caseSection()).
+const std::vector<MarkdownColumn>& tiltView() {
+  static const std::vector<MarkdownColumn> view{
+      {"paper measured deg", md::ifDefined("paper_measured_tilt_min_deg", rangeCell("paper_measured_tilt_min_deg", "paper_measured_tilt_max_deg"), "-")},
+      {"paper simulated deg", rangeCell("paper_simulated_tilt_min_deg", "paper_simulated_tilt_max_deg")},
+      {"ours deg (tilt window)",
+       md::ifDefined("tilt_min_deg",
+                     md::concat({rangeCell("tilt_min_deg", "tilt_max_deg"), md::literal(" ("), md::format("tilt_begin_mm", "%.0f"), md::literal("-"),
+                                 md::format("tilt_end_mm", "%.0f"), md::literal(" mm)")}),
+                     "not finished")},
+      {"ours - paper simulated (midpoints) deg", md::ifDefined("tilt_minus_paper_simulated_deg", md::format("tilt_minus_paper_simulated_deg", "%+.2f"), "")}};
+  return view;
+}
+
+// Computing time beside Table 1 (a view of caseSection()).
+const std::vector<MarkdownColumn>& hoursView() {
+  static const std::vector<MarkdownColumn> view{
+      {"paper h (8-core i7-9700)", md::format("paper_hours", "%.0f")},
+      {"ours: run wall time",
+       md::onlyIf("finished", md::concat({md::format("wall_time_s", "%.0f s"), md::literal(" ("), md::format("stroke_mm", "%.0f"), md::literal(" mm stroke)")}),
+                  "not finished")},
+      {"ours: full scale, projected h",
+       md::concat({md::format("projected_full_scale_h", "%.1f"), md::onlyIf("finished", md::literal(" (measured cost)"), " (estimate)")})},
+      {"ours / paper", md::format("projected_over_paper", "%.2f")}};
+  return view;
+}
+
+std::vector<Case> caseRows(const std::vector<ReportCase>& cases) {
+  std::vector<Case> rows;
+  for (const ReportCase& c : cases) rows.push_back(&c);
+  return rows;
+}
+
+// The cases the paper gives a simulated tilt for.
+std::vector<Case> tiltRows(const std::vector<ReportCase>& cases) {
+  std::vector<Case> rows;
+  for (const ReportCase& c : cases)
+    if (c.paper && c.paper->simulated_tilt_deg) rows.push_back(&c);
+  return rows;
 }
 
 // Why the cases step as they do, the step of each, and the convergence study behind it.
@@ -140,13 +232,8 @@ std::string timeStepSection(const std::vector<ReportCase>& cases, const std::opt
         "contact law does not use G: the hysteretic spring loads at K1 = 5 R* Y with the yield strength Y = 5.88e5 Pa and unloads "
         "at K2 = K1 / e^2, so a particle contact lasts about a millisecond. The cases here step at `dem.dt_fraction` of the "
         "stiffest spring's contact half period pi sqrt(m*/k_max) over the particle, bin and tool contacts (docs/architecture.md "
-        "section 11); `dem.dt_s` = 7.93e-7 keeps the paper's step.\n\n| case | DEM step s | critical step s | why |\n|---|---|---|---|\n";
-  for (const ReportCase& c : cases) {
-    const physics::DemStep step = physics::demTimeStep(c.study);
-    md << "| " << c.name << " | " << formatNumber("%.3g", study::demStepDividing(step.step_s, c.study.fem.dt_s)) << " | "
-       << formatNumber("%.3g", step.critical_s) << " | " << step.why << " |\n";
-  }
-  md << '\n';
+        "section 11); `dem.dt_s` = 7.93e-7 keeps the paper's step.\n\n"
+     << caseSection().markdownOf(caseRows(cases), timeStepView()) << '\n';
   if (convergence) md << "Convergence (`demfem-bench-paper-convergence`):\n\n" << markdown(*convergence) << '\n';
   return md.str();
 }
@@ -213,25 +300,6 @@ std::string plotFile(analysis::StagedOutput& out, const analysis::GnuplotRendere
   const std::string svg = "plots/" + name + ".svg";
   renderer.render(figure, out.stage("plots/" + name + ".gp"), out.stage(svg));
   return "![" + figure.title + "](" + svg + ")\n\n";
-}
-
-nlohmann::json caseJson(const ReportCase& c) {
-  nlohmann::json j{{"name", c.name}, {"tool", c.study.tools.front().name}, {"model", kindName(c.study.kind)},
-                   {"depth_mm", c.study.tools.front().motion.depth_m * 1e3}, {"full_scale_estimate_s", c.full_estimate_s},
-                   {"paper_hours", c.paper ? nlohmann::json(c.paper->hours) : nlohmann::json(nullptr)}, {"finished", c.run.has_value()}};
-  if (!c.run) return j;
-  const Evaluated& e = *c.run;
-  j["stroke_mm"] = e.stroke_mm;
-  j["window_mm"] = {e.window_begin_mm, e.window_end_mm};
-  j["force_mean_N"] = e.window.force_N.mean;
-  j["force_std_N"] = e.window.force_N.std_dev;
-  j["deformation_mean_mm"] = e.window.deformation_mm.mean;
-  j["deformation_std_mm"] = e.window.deformation_mm.std_dev;
-  j["fit"] = {{"signal", e.fit_signal}, {"a", e.fit.a}, {"b", e.fit.b}, {"b_std_error", e.fit.b_std_error}};
-  if (e.tilt_range_deg) j["tilt_range_deg"] = {e.tilt_range_deg->first, e.tilt_range_deg->second};
-  j["wall_time_s"] = e.wall_s;
-  j["run_estimate_s"] = e.run_estimate_s;
-  return j;
 }
 
 }  // namespace
@@ -310,11 +378,11 @@ nlohmann::json writePaperReport(const std::vector<fs::path>& study_files, const 
         "(100-500 mm and 200-400 mm scaled by stroke / 600 mm). The paper states Fig. 15's means and Fig. 17's fits as "
         "figures only; the tables give ours.\n\n"
      << "## Time step\n\n" << timeStepSection(cases, o.convergence)
-     << "## Cases (Table 1), Fig. 15 means and Fig. 17 fits\n\n" << caseTable(cases)
-     << "\n## Tilt of the PMMA tool at 200-400 mm (Section 3)\n\n" << tiltTable(cases)
+     << "## Cases (Table 1), Fig. 15 means and Fig. 17 fits\n\n" << caseSection().markdownOf(caseRows(cases))
+     << "\n## Tilt of the PMMA tool at 200-400 mm (Section 3)\n\n" << caseSection().markdownOf(tiltRows(cases), tiltView())
      << "\n## Computing time beside Table 1\n\nOurs: the built-in DEM on this machine; the projection scales the "
         "full-scale estimate (`demfem validate`) by the measured / estimated cost of the run itself.\n\n"
-     << hoursTable(cases) << '\n';
+     << caseSection().markdownOf(caseRows(cases), hoursView()) << '\n';
   if (o.renderer) {
     md << "## Figures\n\n"
        << plotFile(out, *o.renderer, "paper_force_curves", curvesFigure(cases, true))
@@ -322,9 +390,8 @@ nlohmann::json writePaperReport(const std::vector<fs::path>& study_files, const 
        << plotFile(out, *o.renderer, "paper_spectra", spectraFigure(cases));
   }
   out.writeText("paper-reproduction.md", md.str());
-  nlohmann::json doc{{"cases", nlohmann::json::array()}};
-  for (const ReportCase& c : cases) doc["cases"].push_back(caseJson(c));
-  return doc;
+  out.writeText("paper-cases.csv", caseSection().csv(caseRows(cases)));
+  return {{"cases", caseSection().json(caseRows(cases))}};
 }
 
 }  // namespace demfem::campaign

@@ -57,7 +57,7 @@ TEST_CASE("weight-drop signatures give the ratios, force per weight and damping 
   CHECK(s.weight_relations.damping_difference_change == Approx(0.02).margin(0.006));
   const double expected_consistency = 0.5 * 0.95 * ((5.0 / 5.5) * (5.0 / 5.5) + (3.5 / 3.6) * (3.5 / 3.6));
   CHECK(s.weight_relations.stiffness_consistency == Approx(expected_consistency).epsilon(0.02));
-  CHECK(toJson(s)["weight_drops"][1]["force_ratio"]["value"].get<double>() == Approx(1.08).epsilon(0.002));
+  CHECK(toJson(s)["weight_drops"][1]["force_ratio"].get<double>() == Approx(1.08).epsilon(0.002));
 }
 
 TEST_CASE("soil-bin signatures give the bias per depth and its trend with depth", "[analysis]") {

@@ -2,6 +2,7 @@
 // plots written, nothing left under a final name when something fails.
 #include "demfem/analysis/workflow.hpp"
 #include "demfem/analysis/synthetic.hpp"
+#include "support/csv_json.hpp"
 #include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
@@ -12,6 +13,7 @@
 #include <vector>
 
 using namespace demfem::analysis;
+using demfem::support::checkCsvMatchesJson;
 using demfem::support::TempDir;
 namespace fs = std::filesystem;
 
@@ -22,37 +24,6 @@ std::string readText(const fs::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-// Every cell of the CSV table `csv` equals the value of its column in the JSON row of the same
-// index (the CSV's %.10g numbers to 1e-9, text as it is, "nan" for null): both are generated from
-// one declaration of the table's columns.
-void checkCsvMatchesJson(const std::string& csv, const nlohmann::json& rows) {
-  std::istringstream lines(csv);
-  const auto split = [](const std::string& line) {
-    std::vector<std::string> cells;
-    std::istringstream in(line);
-    for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
-    return cells;
-  };
-  std::string line;
-  std::getline(lines, line);
-  const std::vector<std::string> header = split(line);
-  std::size_t row = 0;
-  for (; std::getline(lines, line); ++row) {
-    REQUIRE(row < rows.size());
-    const std::vector<std::string> cells = split(line);
-    REQUIRE(cells.size() == header.size());
-    for (std::size_t i = 0; i < header.size(); ++i) {
-      INFO("column " << header[i] << ", row " << row);
-      const nlohmann::json& value = rows[row].at(header[i]);
-      if (value.is_null()) CHECK(cells[i] == "nan");
-      else if (value.is_number()) CHECK(std::stod(cells[i]) == Approx(value.get<double>()).epsilon(1e-9));
-      else if (value.is_boolean()) CHECK(cells[i] == (value.get<bool>() ? "true" : "false"));
-      else CHECK(cells[i] == value.get<std::string>());
-    }
-  }
-  CHECK(row == rows.size());
 }
 
 // Measured: 2 raw repeats of PMMA 30 mm plus one raw 1 kg weight drop. Simulated: the same cases in

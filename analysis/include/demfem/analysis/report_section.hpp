@@ -97,6 +97,8 @@ MarkdownCell literal(std::string text);
 MarkdownCell concat(std::vector<MarkdownCell> parts);                   // the parts one after another
 // `cell` when the flag column is true, else `otherwise`.
 MarkdownCell onlyIf(const std::string& flag_column, MarkdownCell cell, std::string otherwise = "-");
+// `cell` when the number column is finite (not absent), else `otherwise`.
+MarkdownCell ifDefined(const std::string& number_column, MarkdownCell cell, std::string otherwise = "-");
 }  // namespace md
 
 // A Markdown table from its header and rows of cells.

@@ -26,6 +26,7 @@
 // (percent per mm; a depth-dependent strength leaves a bias that changes with depth).
 #pragma once
 
+#include "demfem/analysis/report_section.hpp"
 #include "demfem/analysis/workflow.hpp"
 
 #include <nlohmann/json.hpp>
@@ -81,6 +82,15 @@ struct SignatureSettings {
 
 Signatures signaturesOf(const ComparisonResult& comparison, const SignatureSettings& settings);
 
+// The report tables of the signatures (report_section.hpp): one row per weight (case, mass_kg, each
+// ratio and difference beside its `_std_error`, force per weight on both sides in N/kg) and one per
+// depth (case, depth_mm, the biases in percent, end rise difference, fluctuation ratio, both
+// spectral slopes). `demfem diagnose` writes their CSV and Markdown.
+const report::Section<WeightDropSignature>& weightDropSignatureSection();
+const report::Section<SoilBinSignature>& soilBinSignatureSection();
+
+// `weight_drops` and `soil_bins` (the two sections' JSON), `weight_relations` (null with fewer than
+// two weights) and `force_bias_per_depth_percent_per_mm` (null with fewer than two depths).
 nlohmann::json toJson(const Signatures& signatures);
 
 }  // namespace demfem::analysis

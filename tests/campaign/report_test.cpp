@@ -1,0 +1,263 @@
+// The reports of calibrate, diagnose and the paper campaign: every CSV table's cells equal the JSON
+// document's values (both generated from one declaration of the table's columns), the numbers put
+// in reach the JSON and the Markdown unchanged, absent values are null.
+#include "demfem/analysis/synthetic.hpp"
+#include "demfem/campaign/calibration.hpp"
+#include "demfem/campaign/diagnose.hpp"
+#include "demfem/campaign/paper_campaign.hpp"
+#include "demfem/campaign/paper_report.hpp"
+#include "support/csv_json.hpp"
+#include "support/temp_dir.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+using namespace demfem;
+using namespace demfem::campaign;
+using demfem::support::checkCsvMatchesJson;
+using demfem::support::nestedRows;
+using demfem::support::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path);
+  REQUIRE(in);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+analysis::CaseKey weight(double mass_kg) { return {analysis::CaseKind::CalibrationWeight, "PMMA", 0.0, mass_kg}; }
+analysis::CaseKey soilBin(double depth_mm) { return {analysis::CaseKind::SoilBin, "PMMA", depth_mm, 0.0}; }
+
+FittedParameter parameter(const std::string& pointer, double lo, double hi, bool log, double initial, std::optional<double> value, double std_dev) {
+  FittedParameter p;
+  p.spec.pointer = pointer, p.spec.lo = lo, p.spec.hi = hi, p.spec.log = log;
+  p.initial = initial, p.value = value, p.std_dev = std_dev, p.identified = value.has_value();
+  p.best = value.value_or(0.7 * hi);
+  return p;
+}
+
+Residual residual(const analysis::CaseKey& key, const std::string& quantity, double measured, double simulated, double sigma) {
+  return {key, quantity, measured, simulated, sigma, (simulated - measured) / sigma, false};
+}
+
+// Two stages: E and alpha from the weights (alpha unidentified, two distinct minima), then a
+// friction from one soil-bin depth.
+StagedCalibration twoStages() {
+  StagedCalibration c;
+  c.stages = {{"weights: E and alpha", {}, {weight(0.5), weight(1.0)}}, {"depth 30 mm: friction", {}, {soilBin(30)}}};
+  CalibrationResult weights;
+  weights.parameters = {parameter("/tools/0/fem/E_Pa", 1e9, 1.6e10, true, 4.06e9, 4.4987e9, 2.8e6),
+                        parameter("/tools/0/fem/alpha_s", 1e-6, 1e-2, true, 5.5e-4, std::nullopt, std::numeric_limits<double>::infinity())};
+  weights.initial_residuals = {residual(weight(0.5), "step_force_N", 2.45, 2.31, 0.01), residual(weight(1.0), "frequency_Hz", 3.1, 2.9, 0.02)};
+  weights.residuals = {residual(weight(0.5), "step_force_N", 2.45, 2.449, 0.01), residual(weight(1.0), "frequency_Hz", 3.1, 3.102, 0.02)};
+  weights.residuals[1].missing = true;
+  weights.initial_chi2 = 296, weights.chi2 = 0.02;
+  weights.minima = {{{4.4987e9, 1e-4}, 0.02}, {{4.51e9, 3e-3}, 0.5}};
+  weights.evaluations = 112, weights.model_runs = 224, weights.cache_hits = 3, weights.wall_time_s = 41.4;
+  CalibrationResult soil;
+  soil.parameters = {parameter("/soil/interactions/0/static_friction", 0.05, 1.5, false, 0.5, 0.57, 0.04)};
+  soil.initial_residuals = {residual(soilBin(30), "force_mean_N", 1.74, 2.2, 0.15)};
+  soil.residuals = {residual(soilBin(30), "force_mean_N", 1.74, 1.98, 0.15)};
+  soil.initial_chi2 = 9.4, soil.chi2 = 2.56;
+  soil.minima = {{{0.57}, 2.56}};
+  soil.evaluations = 8, soil.model_runs = 8, soil.failed_runs = 1, soil.wall_time_s = 1234.5;
+  c.results = {weights, soil};
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("calibrate's tables: every CSV cell equals its JSON value, the numbers given reach both", "[campaign][report]") {
+  TempDir dir("calibrate-report");
+  const StagedCalibration c = twoStages();
+  const CalibrationOptions options;
+  {
+    analysis::StagedOutput out(dir / "out");
+    writeCalibration(c, options, out, nullptr);
+    out.commit();
+  }
+  const nlohmann::json doc = toJson(c, options);
+  checkCsvMatchesJson(readText(dir / "out" / "stages.csv"), doc["stages"]);
+  checkCsvMatchesJson(readText(dir / "out" / "parameters.csv"), nestedRows(doc["stages"], "parameters"));
+  checkCsvMatchesJson(readText(dir / "out" / "residuals.csv"), nestedRows(doc["stages"], "residuals"));
+
+  const nlohmann::json& E = doc["fitted"]["/tools/0/fem/E_Pa"];
+  CHECK(E["value"].get<double>() == 4.4987e9);
+  CHECK(E["std_dev"].get<double>() == 2.8e6);
+  CHECK(doc["fitted"]["/tools/0/fem/alpha_s"]["value"].is_null());                // unidentified: no value
+  CHECK(doc["fitted"]["/tools/0/fem/alpha_s"]["std_dev"].is_null());              // infinite
+  CHECK(doc["stages"][0]["parameters"][1]["best_point"].get<double>() == Approx(7e-3));  // what the calibrated study carries
+  CHECK(doc["stages"][0]["unique"] == false);
+  CHECK(doc["stages"][0]["distinct_minima"] == 2);
+  CHECK(doc["stages"][1]["failed_runs"] == 1);
+  const nlohmann::json& r = doc["stages"][0]["residuals"][0];
+  CHECK(r["case"] == "PMMA_0.5kg");
+  CHECK(r["initial_simulated"].get<double>() == 2.31);
+  CHECK(r["simulated"].get<double>() == 2.449);
+  CHECK(r["normalized"].get<double>() == Approx(-0.1).epsilon(1e-9));
+  CHECK(doc["stages"][0]["residuals"][1]["missing"] == true);
+  CHECK(doc["model_runs"] == 232);
+  CHECK(doc["wall_time_s"].get<double>() == Approx(1275.9));
+
+  const std::string md = readText(dir / "out" / "report.md");
+  CHECK_THAT(md, Catch::Contains("| `/tools/0/fem/E_Pa` | 4.06e+09 | 4.4987e+09 | 2.8e+06 | 1e+09 - 1.6e+10 (log) |"));
+  CHECK_THAT(md, Catch::Contains("| `/tools/0/fem/alpha_s` | 0.00055 | unidentified | - | 1e-06 - 0.01 (log) |"));
+  CHECK_THAT(md, Catch::Contains("the calibrated study carries the best point found, 0.007,"));
+  CHECK_THAT(md, Catch::Contains("| PMMA, 0.5 kg weight | step_force_N | 2.45 | 0.01 | 2.31 | 2.449 | -0.1 |"));
+  CHECK_THAT(md, Catch::Contains("chi2 296 -> 0.02 over 2 quantities. NOT unique: 2 distinct minima"));
+  CHECK_THAT(md, Catch::Contains("Model runs 8 (cache hits 0, failed DEM runs 1), objective evaluations 8, wall time 1234.5 s."));
+}
+
+namespace {
+
+CauseResult fittedCause() {
+  CauseResult c;
+  c.id = "clamp_compliance";
+  c.description = "a rotational spring at the clamp, not a rigid root";
+  c.expected_signature = "force per weight lower, deformation larger, frequency lower";
+  c.match = {true, "force per weight 4.1 % low, deformation 17 % high"};
+  c.fitted = true;
+  c.parameters = {parameter("/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", 0.15, 1500, true, 150, 1.52, 0.03)};
+  c.minima = 1, c.held_out = true, c.split = "leave one case out (2 folds)";
+  c.error_before_percent = 17.2, c.error_after_percent = 0.15, c.gain_percent = 99.1;
+  c.chi2 = 12.5, c.bic = 15.3, c.delta_bic = -2841.7, c.model_runs = 96, c.wall_time_s = 3.2;
+  return c;
+}
+
+CauseResult unfittedCause() {
+  CauseResult c;
+  c.id = "sensor_gain";
+  c.description = "a channel's gain off";
+  c.expected_signature = "one channel's steady ratio off at every weight, frequency and damping unchanged";
+  c.match = {false, "frequency ratio 0.93 +- 0.01: changed, \"not a gain\""};
+  return c;
+}
+
+Diagnosis diagnosis() {
+  Diagnosis d;
+  analysis::WeightDropSignature light, heavy;
+  light.key = weight(0.125), heavy.key = weight(0.25);
+  light.force_ratio = {0.959, 0.004}, light.deformation_ratio = {1.17, 0.01}, light.frequency_ratio = {0.93, 0.002};
+  light.damping_difference = {0.0011, 0.0004};
+  light.force_per_weight_measured_N_per_kg = 4.39, light.force_per_weight_simulated_N_per_kg = 4.58;
+  heavy = light, heavy.key = weight(0.25), heavy.force_ratio = {0.961, 0.003};
+  d.signatures.weight_drops = {light, heavy};
+  analysis::SoilBinSignature bin;
+  bin.key = soilBin(40), bin.force_bias_percent = -37.5, bin.deformation_bias_percent = std::nan("");
+  bin.end_rise_difference = 0.02, bin.fluctuation_ratio = 0.8, bin.spectral_slope_measured = -1.1, bin.spectral_slope_simulated = -0.9;
+  d.signatures.soil_bins = {bin};
+  d.ranking = {fittedCause(), unfittedCause()};
+  d.cause = "clamp_compliance";
+  d.reason = "clamp_compliance cuts the held-out error by 99 %";
+  d.gain_percent = 99.1, d.baseline_error_percent = 17.2, d.baseline_chi2 = 2856, d.residual_count = 16, d.wall_time_s = 12;
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, unfitted causes carry null numbers", "[campaign][report]") {
+  TempDir dir("diagnose-report");
+  const Diagnosis d = diagnosis();
+  const DiagnosisSettings settings;
+  {
+    analysis::StagedOutput out(dir / "out");
+    writeDiagnosis(d, settings, out, nullptr);
+    out.commit();
+  }
+  const nlohmann::json doc = toJson(d, settings, "extended_study.json");
+  checkCsvMatchesJson(readText(dir / "out" / "ranking.csv"), doc["ranking"]);
+  checkCsvMatchesJson(readText(dir / "out" / "parameters.csv"), nestedRows(doc["ranking"], "parameters"));
+  checkCsvMatchesJson(readText(dir / "out" / "weight_signatures.csv"), doc["signatures"]["weight_drops"]);
+  checkCsvMatchesJson(readText(dir / "out" / "soil_signatures.csv"), doc["signatures"]["soil_bins"]);
+
+  CHECK(doc["verdict"] == "cause");
+  CHECK(doc["cause"] == "clamp_compliance");
+  CHECK(doc["gain_percent"].get<double>() == 99.1);
+  CHECK(doc["extended_study"] == "extended_study.json");
+  const nlohmann::json& first = doc["ranking"][0];
+  CHECK(first["id"] == "clamp_compliance");
+  CHECK(first["rank"].get<double>() == 1);
+  CHECK(first["error_before_percent"].get<double>() == 17.2);
+  CHECK(first["error_after_percent"].get<double>() == 0.15);
+  CHECK(first["unique_fit"] == true);
+  CHECK(first["evidence"] == "force per weight 4.1 % low, deformation 17 % high");
+  CHECK(first["parameters"][0]["value"].get<double>() == 1.52);
+  CHECK(first["parameters"][0]["std_dev"].get<double>() == 0.03);
+  CHECK(first["parameters"][0]["identified"] == true);
+  const nlohmann::json& second = doc["ranking"][1];
+  CHECK(second["rank"].is_null());
+  CHECK(second["fitted"] == false);
+  CHECK(second["error_after_percent"].is_null());
+  CHECK(second["parameters"].empty());
+  CHECK(second["evidence"] == "frequency ratio 0.93 +- 0.01: changed, \"not a gain\"");
+  CHECK(doc["signatures"]["weight_drops"][1]["force_ratio"].get<double>() == 0.961);
+  CHECK(doc["signatures"]["weight_drops"][1]["force_ratio_std_error"].get<double>() == 0.003);
+  CHECK(doc["signatures"]["soil_bins"][0]["deformation_bias_percent"].is_null());
+
+  const std::string md = readText(dir / "out" / "report.md");
+  CHECK_THAT(md, Catch::Contains("| 1 | clamp_compliance | clamp_rotational_stiffness_Nm_per_rad = 1.52 +- 0.03 | yes | 17.2 | 0.15 | 99.1 | "
+                                 "-2842 | leave one case out (2 folds) |"));
+  CHECK_THAT(md, Catch::Contains("| - | sensor_gain | not fitted: signature absent |  |"));
+  CHECK_THAT(md, Catch::Contains("| 0.125 kg | 0.959 +- 0.004 | 1.17 +- 0.01 | 4.39 / 4.58 | 0.93 +- 0.002 | 0.0011 +- 0.0004 |"));
+  CHECK_THAT(md, Catch::Contains("| 40 mm | -37.5 | - | 0.02 | 0.8 | -1.1 / -0.9 |"));
+}
+
+TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an unfinished case has null run figures", "[campaign][report]") {
+  TempDir dir("paper-report");
+  const fs::path studies = fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper";
+  // A finished run of the PMMA 30 mm case: a synthetic calibrated recording (window means known).
+  const fs::path run = dir / "campaign" / "pmma_coupled_30";
+  fs::create_directories(run);
+  fs::copy_file(studies / "pmma_coupled_30.json", run / "study.json");
+  analysis::SoilBinTruth truth;
+  truth.force_N = 25, truth.deformation_mm = 3;
+  analysis::SyntheticRecording recording = analysis::makeSoilBinRecording(truth, analysis::RecordingFormat::Calibrated);
+  recording.sidecar["complete"] = true;
+  analysis::writeSyntheticRecording(recording, run / "sensors.csv");
+  std::ofstream(run / kRunRecord) << R"({"wall_time_s": 5400})";
+
+  ReportOptions options;
+  options.directory = dir / "campaign";
+  options.estimate_wall_s = [](const study::Study& s) { return 1e5 * s.tools.front().motion.depth_m; };
+  nlohmann::json doc;
+  {
+    analysis::StagedOutput out(dir / "report");
+    doc = writePaperReport({studies / "pmma_coupled_30.json", studies / "s235_dem_18.json"}, options, out);
+    out.commit();
+  }
+  checkCsvMatchesJson(readText(dir / "report" / "paper-cases.csv"), doc["cases"]);
+
+  const nlohmann::json& pmma = doc["cases"][0];
+  CHECK(pmma["finished"] == true);
+  CHECK(pmma["depth_mm"].get<double>() == Approx(30));
+  CHECK(pmma["force_mean_N"].get<double>() == Approx(25).epsilon(0.01));
+  CHECK(pmma["deformation_mean_mm"].get<double>() == Approx(3).epsilon(0.01));
+  CHECK(pmma["window_begin_mm"].get<double>() == Approx(100));
+  CHECK(pmma["window_end_mm"].get<double>() == Approx(500));
+  CHECK(pmma["fit_signal"] == "deformation");
+  CHECK(pmma["wall_time_s"].get<double>() == 5400);
+  CHECK(pmma["paper_hours"].get<double>() == 54);  // Table 1
+  CHECK(pmma["paper_simulated_tilt_min_deg"].get<double>() == 2.1);
+  // Its full-scale projection: the estimate (3000 s) times measured / estimated of the run (1).
+  CHECK(pmma["projected_full_scale_h"].get<double>() == Approx(5400.0 / 3600));
+  const nlohmann::json& s235 = doc["cases"][1];
+  CHECK(s235["finished"] == false);
+  CHECK(s235["force_mean_N"].is_null());
+  CHECK(s235["tilt_min_deg"].is_null());
+  CHECK(s235["projected_full_scale_h"].get<double>() == Approx(1800.0 / 3600));
+
+  const std::string md = readText(dir / "report" / "paper-reproduction.md");
+  CHECK_THAT(md, Catch::Contains("| pmma_coupled_30 | PMMA | DEM-FEM | 30 | "));
+  CHECK_THAT(md, Catch::Contains("| s235_dem_18 | S235 | DEM | 18 | "));
+  CHECK_THAT(md, Catch::Contains("| not finished |  |  |"));
+  CHECK_THAT(md, Catch::Contains("| pmma_coupled_30 | 2.00-2.10 | 2.10-2.30 | "));
+  CHECK_THAT(md, Catch::Contains("| s235_dem_18 | 44 | not finished | 0.5 (estimate) | 0.01 |"));
+}
