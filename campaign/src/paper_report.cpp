@@ -116,7 +116,7 @@ MarkdownCell rangeCell(const std::string& lo, const std::string& hi) {
 
 MarkdownCell ifFinished(MarkdownCell cell) { return md::onlyIf("finished", std::move(cell), ""); }
 
-// paper-cases.csv and the JSON's `cases`: one row per case, every table of the report a view of it.
+// paper-reproduction.csv and the JSON's `cases`: one row per case, every table of the report a view of it.
 const Section<Case>& caseSection() {
   using R = Case;
   static const Section<R> section{
@@ -390,7 +390,7 @@ nlohmann::json writePaperReport(const std::vector<fs::path>& study_files, const 
        << plotFile(out, *o.renderer, "paper_spectra", spectraFigure(cases));
   }
   out.writeText("paper-reproduction.md", md.str());
-  out.writeText("paper-cases.csv", caseSection().csv(caseRows(cases)));
+  out.writeText("paper-reproduction.csv", caseSection().csv(caseRows(cases)));
   return {{"cases", caseSection().json(caseRows(cases))}};
 }
 

@@ -14,17 +14,11 @@
 
 using namespace demfem::analysis;
 using demfem::support::checkCsvMatchesJson;
+using demfem::support::readText;
 using demfem::support::TempDir;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string readText(const fs::path& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // Measured: 2 raw repeats of PMMA 30 mm plus one raw 1 kg weight drop. Simulated: the same cases in
 // the FEM client's format with force and deformation scaled by `scale`, a steeper spectrum

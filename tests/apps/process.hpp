@@ -33,18 +33,12 @@ inline fs::path binaryDir() { return DEMFEM_BINARY_DIR; }
 inline fs::path sourceDir() { return DEMFEM_SOURCE_DIR; }
 inline std::string app(const std::string& name) { return (binaryDir() / "apps" / name).string(); }
 using support::freshDir;
+using support::readText;
 using support::shippedStudyJson;
 using support::useShortStroke;
 using support::useSmallBin;
 using support::useSmallTool;
 using support::writeStudy;
-
-inline std::string readText(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 class Process {
  public:

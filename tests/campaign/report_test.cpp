@@ -13,24 +13,24 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <limits>
-#include <sstream>
 
 using namespace demfem;
 using namespace demfem::campaign;
 using demfem::support::checkCsvMatchesJson;
 using demfem::support::nestedRows;
+using demfem::support::readText;
 using demfem::support::TempDir;
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path);
-  REQUIRE(in);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+// Writes through a staged output into `dir` and commits it.
+void writeStaged(const fs::path& dir, const std::function<void(analysis::StagedOutput&)>& write) {
+  analysis::StagedOutput out(dir);
+  write(out);
+  out.commit();
 }
 
 analysis::CaseKey weight(double mass_kg) { return {analysis::CaseKind::CalibrationWeight, "PMMA", 0.0, mass_kg}; }
@@ -79,11 +79,7 @@ TEST_CASE("calibrate's tables: every CSV cell equals its JSON value, the numbers
   TempDir dir("calibrate-report");
   const StagedCalibration c = twoStages();
   const CalibrationOptions options;
-  {
-    analysis::StagedOutput out(dir / "out");
-    writeCalibration(c, options, out, nullptr);
-    out.commit();
-  }
+  writeStaged(dir / "out", [&](analysis::StagedOutput& out) { writeCalibration(c, options, out, nullptr); });
   const nlohmann::json doc = toJson(c, options);
   checkCsvMatchesJson(readText(dir / "out" / "stages.csv"), doc["stages"]);
   checkCsvMatchesJson(readText(dir / "out" / "parameters.csv"), nestedRows(doc["stages"], "parameters"));
@@ -167,11 +163,7 @@ TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, unfitted cau
   TempDir dir("diagnose-report");
   const Diagnosis d = diagnosis();
   const DiagnosisSettings settings;
-  {
-    analysis::StagedOutput out(dir / "out");
-    writeDiagnosis(d, settings, out, nullptr);
-    out.commit();
-  }
+  writeStaged(dir / "out", [&](analysis::StagedOutput& out) { writeDiagnosis(d, settings, out, nullptr); });
   const nlohmann::json doc = toJson(d, settings, "extended_study.json");
   checkCsvMatchesJson(readText(dir / "out" / "ranking.csv"), doc["ranking"]);
   checkCsvMatchesJson(readText(dir / "out" / "parameters.csv"), nestedRows(doc["ranking"], "parameters"));
@@ -228,12 +220,10 @@ TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an un
   options.directory = dir / "campaign";
   options.estimate_wall_s = [](const study::Study& s) { return 1e5 * s.tools.front().motion.depth_m; };
   nlohmann::json doc;
-  {
-    analysis::StagedOutput out(dir / "report");
+  writeStaged(dir / "report", [&](analysis::StagedOutput& out) {
     doc = writePaperReport({studies / "pmma_coupled_30.json", studies / "s235_dem_18.json"}, options, out);
-    out.commit();
-  }
-  checkCsvMatchesJson(readText(dir / "report" / "paper-cases.csv"), doc["cases"]);
+  });
+  checkCsvMatchesJson(readText(dir / "report" / "paper-reproduction.csv"), doc["cases"]);
 
   const nlohmann::json& pmma = doc["cases"][0];
   CHECK(pmma["finished"] == true);

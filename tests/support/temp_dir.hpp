@@ -1,7 +1,10 @@
-// Shared test fixture: scratch directories under the system temp directory.
+// Shared test fixture: scratch directories under the system temp directory, and reading back the
+// files written there.
 #pragma once
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <random>
 #include <string>
 #include <system_error>
@@ -37,6 +40,14 @@ inline std::filesystem::path freshDir(const std::string& name) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("demfem-" + name + "-" + std::to_string(std::random_device{}()));
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// The whole text of `path` ("" when it cannot be opened: the test's checks on the text then fail).
+inline std::string readText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 }  // namespace demfem::support

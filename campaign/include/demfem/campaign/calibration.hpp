@@ -182,13 +182,20 @@ StagedCalibration calibrateStages(const nlohmann::ordered_json& study, const std
                                   const std::vector<analysis::Recording>& recordings, const std::vector<Stage>& stages,
                                   Model& model, const CalibrationOptions& options);
 
-// JSON with units in key names: per stage the fitted parameters (value or null, std_dev, identified),
-// residuals per quantity and case, chi2, minima, evaluations, model_runs, cache_hits, wall_time_s.
+// JSON (docs/calibration.md lists the keys): `fitted` (per pointer: value or null, std_dev,
+// identified), `stages` (one object per row of stages.csv, each with its `cases`, its `parameters`
+// and `residuals`, the rows of parameters.csv and residuals.csv of that stage, and its `minima`),
+// totals of model_runs, cache_hits, evaluations and wall_time_s, and the objective in words.
+// Numbers that are not finite are null.
 nlohmann::json toJson(const StagedCalibration& calibration, const CalibrationOptions& options);
 
 // Writes calibrated_study.json, report.md (objective stated, fitted values, uncertainty,
-// residuals, identification, runs, wall time) and, unless renderer is null, plots/<case>.svg
-// (measured against calibrated and initial) through `out` (committed by the caller).
+// residuals, identification, runs, wall time), the tables stages.csv (chi2, uniqueness, runs and
+// wall time per stage), parameters.csv (per stage and parameter: bounds, initial, fitted value,
+// standard deviation, identification, best point) and residuals.csv (per stage, case and quantity:
+// measured, sigma, simulated and residual at the start and at the fit), each cell equal to the
+// JSON's value of its column, and, unless renderer is null, plots/stage<k>_<case>.svg (measured
+// against calibrated and initial) through `out` (committed by the caller).
 void writeCalibration(const StagedCalibration& calibration, const CalibrationOptions& options,
                       analysis::StagedOutput& out, const analysis::GnuplotRenderer* renderer);
 

@@ -113,13 +113,16 @@ double errorPercent(const std::vector<Residual>& residuals);
 Diagnosis diagnose(const nlohmann::ordered_json& study, const std::string& origin, const std::vector<analysis::Recording>& recordings,
                    Model& model, const DiagnosisSettings& settings);
 
-// `verdict`, `cause`, `reason`, `ranking` (id, parameters with value_/std_dev and identification,
-// held-out error before/after in percent, gain, evidence, BIC), `gain_percent`, `signatures`,
-// `extended_study` (the path given), thresholds and wall time.
+// `verdict`, `cause`, `reason`, `ranking` (one object per row of ranking.csv: rank, id, held-out
+// error before/after in percent, gain, BIC, evidence, ...; null numbers for a cause not fitted;
+// each with its `parameters`, the rows of parameters.csv of that cause: value, std_dev,
+// identification), `gain_percent`, `signatures` (analysis::toJson), `extended_study` (the path
+// given), thresholds and wall time (docs/diagnosis.md lists the keys).
 nlohmann::json toJson(const Diagnosis& diagnosis, const DiagnosisSettings& settings, const std::string& extended_study_path);
 
 // extended_study.json, report.md (signatures, ranking, the gain, before/after plots unless renderer
-// is null) through `out` (committed by the caller).
+// is null), the tables weight_signatures.csv, soil_signatures.csv, ranking.csv and parameters.csv
+// (each cell equal to the JSON's value of its column) through `out` (committed by the caller).
 void writeDiagnosis(const Diagnosis& diagnosis, const DiagnosisSettings& settings, analysis::StagedOutput& out,
                     const analysis::GnuplotRenderer* renderer);
 

@@ -19,9 +19,15 @@
 //   of the study file as given (estimate_wall_s), times measured / estimated of the run itself.
 // - Time step: with `convergence` (the bench's JSON, campaign/paper_convergence.hpp) its table and
 //   verdict, after the explanation of the step the cases run at.
-// - Output: `paper-reproduction.md` and, with a renderer, plots/paper_force_curves.svg,
-//   plots/paper_deformation_curves.svg and plots/paper_spectra.svg (scripts beside them) in `out`
-//   (staged: nothing appears unless everything was written). Returns the report as JSON.
+// - Output: `paper-reproduction.md`, its table `paper-reproduction.csv` (one row per case: the
+//   case, its tool, model, depth and velocities, DEM step, the run's stroke, window, window means
+//   and spreads, spectral fit, tilt range beside the paper's, wall time and the full-scale
+//   projection beside Table 1's hours; a case not finished has its run's figures empty) and, with a
+//   renderer, plots/paper_force_curves.svg, plots/paper_deformation_curves.svg and
+//   plots/paper_spectra.svg (scripts beside them) in `out` (staged: nothing appears unless
+//   everything was written). Every table of the Markdown is a view of that one table (a report
+//   section, demfem/analysis/report_section.hpp). Returns the report as JSON: `cases`, one object
+//   per case keyed by the CSV's column names, null where the CSV has "nan".
 // - Throws ArgumentError for a study that is not a soil-bin case, analysis::InputError for a
 //   finished run that cannot be evaluated, analysis::PlotError when gnuplot fails.
 #pragma once
