@@ -9,19 +9,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 namespace demfem::campaign {
 namespace {
 
 using namespace analysis::report;
 
-std::string number(double v, int precision = 4) {
-  std::ostringstream out;
-  out.precision(precision);
-  out << v;
-  return out.str();
-}
 
 // One cause of the ranking; fitted causes carry their rank (from 1).
 struct CauseRow {
@@ -141,14 +134,14 @@ std::string signatureTable(const analysis::Signatures& s) {
   if (!s.weight_drops.empty()) {
     md += analysis::weightDropSignatureSection().markdownOf(s.weight_drops);
     if (s.weight_relations.defined)
-      md += "\nAcross the weights (heaviest minus lightest): force ratio " + number(s.weight_relations.force_ratio_change) +
-            ", deformation ratio " + number(s.weight_relations.deformation_ratio_change) + ", damping difference " +
-            number(s.weight_relations.damping_difference_change) + "; frequency ratio^2 x deformation ratio " +
-            number(s.weight_relations.stiffness_consistency) + " (1 for a pure stiffness error).\n";
+      md += "\nAcross the weights (heaviest minus lightest): force ratio " + shortNum(s.weight_relations.force_ratio_change) +
+            ", deformation ratio " + shortNum(s.weight_relations.deformation_ratio_change) + ", damping difference " +
+            shortNum(s.weight_relations.damping_difference_change) + "; frequency ratio^2 x deformation ratio " +
+            shortNum(s.weight_relations.stiffness_consistency) + " (1 for a pure stiffness error).\n";
   }
   if (!s.soil_bins.empty()) {
     md += "\n" + analysis::soilBinSignatureSection().markdownOf(s.soil_bins);
-    if (s.force_bias_per_depth_percent_per_mm) md += "\nForce bias against depth: " + number(*s.force_bias_per_depth_percent_per_mm) + " % per mm.\n";
+    if (s.force_bias_per_depth_percent_per_mm) md += "\nForce bias against depth: " + shortNum(*s.force_bias_per_depth_percent_per_mm) + " % per mm.\n";
   }
   return md;
 }
@@ -191,15 +184,15 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   out.writeText("extended_study.json", d.extended_study.dump(2) + "\n");
   std::string md = "# Diagnosis\n\n";
   md += "**Verdict: " + (d.cause ? "cause `" + *d.cause + "`" : std::string("no significant discrepancy")) + "** - " + d.reason + ".\n\n";
-  if (d.cause) md += "Held-out error cut by the extension: " + number(d.gain_percent) + " %. The extended study is `extended_study.json`.\n\n";
-  md += "Baseline (the study as given) against all cases: error " + number(d.baseline_error_percent) + " % (RMS of 100 (sim - meas) / meas " +
-        "over every quantity of every case), chi2 " + number(d.baseline_chi2) + " over " + std::to_string(d.residual_count) + " residuals.\n\n";
+  if (d.cause) md += "Held-out error cut by the extension: " + shortNum(d.gain_percent) + " %. The extended study is `extended_study.json`.\n\n";
+  md += "Baseline (the study as given) against all cases: error " + shortNum(d.baseline_error_percent) + " % (RMS of 100 (sim - meas) / meas " +
+        "over every quantity of every case), chi2 " + shortNum(d.baseline_chi2) + " over " + std::to_string(d.residual_count) + " residuals.\n\n";
   if (!d.failed_baseline_cases.empty())
     md += "Left out of every error and BIC: the cases whose baseline run failed (DEM blow-up): " +
           caseLabels(d.failed_baseline_cases).dump() + ".\n\n";
-  md += "Thresholds: a cause is named when the baseline error is at least " + number(settings.min_error_percent) +
-        " %, its extension cuts the held-out error by at least " + number(settings.min_gain_percent) +
-        " % and lowers BIC = chi2 + k ln n by at least " + number(settings.min_delta_bic) + " (docs/diagnosis.md).\n\n";
+  md += "Thresholds: a cause is named when the baseline error is at least " + shortNum(settings.min_error_percent) +
+        " %, its extension cuts the held-out error by at least " + shortNum(settings.min_gain_percent) +
+        " % and lowers BIC = chi2 + k ln n by at least " + shortNum(settings.min_delta_bic) + " (docs/diagnosis.md).\n\n";
   md += "## Signatures\n\n" + signatureTable(d.signatures) + "\n## Ranking\n\n" + rankingSection().markdownOf(rankingRows(d)) + "\n## Evidence\n\n";
   for (const CauseResult& c : d.ranking)
     md += "- `" + c.id + "` (" + c.description + "): expects " + c.expected_signature + ". " +
@@ -217,7 +210,7 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
                      out.stage(name + ".gp"), out.stage(name + ".svg"));
     md += "![" + m.key.title() + "](" + name + ".svg)\n\n";
   }
-  md += "\nWall time " + number(d.wall_time_s, 3) + " s.\n";
+  md += "\nWall time " + shortNum(d.wall_time_s, 3) + " s.\n";
   out.writeText("report.md", md);
   const std::vector<CauseRow> rows = rankingRows(d);
   std::vector<ParameterRow> parameters;

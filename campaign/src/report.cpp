@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <sstream>
 
 namespace demfem::campaign {
 namespace {
@@ -118,12 +117,8 @@ nlohmann::json stageJson(const StageRow& stage) {
   return j;
 }
 
-std::string number(double v) {
-  std::ostringstream out;
-  out.precision(6);
-  out << v;
-  return out.str();
-}
+// A number of the report's prose: six digits.
+std::string number(double v) { return shortNum(v, 6); }
 
 std::string objectiveText(const CalibrationOptions& o) {
   return "chi2 = sum over cases and quantities of ((simulated - measured) / sigma)^2. Calibration-weight cases: step height of "
@@ -141,7 +136,7 @@ std::string objectiveText(const CalibrationOptions& o) {
 // The sentence on a parameter that the recordings do not identify.
 std::string unidentifiedNote(const RowValues& p) {
   return "\n`" + csvText(p["pointer"]) + "` is not identified by these recordings (the objective is flat along it within the noise); "
-         "the calibrated study carries the best point found, " + shortNum(p.number("best_point"), 6) + ", one of many that fit equally well.\n";
+         "the calibrated study carries the best point found, " + number(p.number("best_point")) + ", one of many that fit equally well.\n";
 }
 
 // The distinct minima of a stage (values in the order of its parameters).
@@ -168,11 +163,11 @@ std::string stageReport(const StageRow& stage, const std::vector<std::string>& p
   }
   const RowValues v = stageSection().values(stage);
   const auto count = [&v](const char* column) { return csvText(v[column]); };
-  s += "\nchi2 " + shortNum(v.number("initial_chi2"), 6) + " -> " + shortNum(v.number("chi2"), 6) + " over " + count("quantities") + " quantities. ";
+  s += "\nchi2 " + number(v.number("initial_chi2")) + " -> " + number(v.number("chi2")) + " over " + count("quantities") + " quantities. ";
   s += v.flag("unique") ? std::string("Unique: every start ended at the same minimum or one clearly worse.\n")
                         : "NOT unique: " + count("distinct_minima") + " distinct minima fit within the noise:\n\n" + minimaText(*stage.result);
   s += "\nModel runs " + count("model_runs") + " (cache hits " + count("cache_hits") + ", failed DEM runs " + count("failed_runs") +
-       "), objective evaluations " + count("evaluations") + ", wall time " + shortNum(v.number("wall_time_s"), 6) + " s.\n\n" +
+       "), objective evaluations " + count("evaluations") + ", wall time " + number(v.number("wall_time_s")) + " s.\n\n" +
        residualSection().markdownOf(residualRows(stage));
   for (const auto& p : plots) s += "\n![" + p + "](" + p + ")\n";
   return s + "\n";
