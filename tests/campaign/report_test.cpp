@@ -15,6 +15,8 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <string>
+#include <vector>
 
 using namespace demfem;
 using namespace demfem::campaign;
@@ -25,6 +27,11 @@ using demfem::support::TempDir;
 namespace fs = std::filesystem;
 
 namespace {
+
+// Every piece of `expected` appears in `text`.
+void checkContains(const std::string& text, const std::vector<std::string>& expected) {
+  for (const std::string& piece : expected) CHECK_THAT(text, Catch::Contains(piece));
+}
 
 // Writes through a staged output into `dir` and commits it.
 void writeStaged(const fs::path& dir, const std::function<void(analysis::StagedOutput&)>& write) {
@@ -73,6 +80,48 @@ StagedCalibration twoStages() {
   return c;
 }
 
+CauseResult cause(std::string id, std::string description, std::string expected_signature, SignatureMatch match) {
+  CauseResult c;
+  c.id = std::move(id), c.description = std::move(description), c.expected_signature = std::move(expected_signature), c.match = std::move(match);
+  return c;
+}
+
+CauseResult fittedCause() {
+  CauseResult c = cause("clamp_compliance", "a rotational spring at the clamp, not a rigid root",
+                        "force per weight lower, deformation larger, frequency lower", {true, "force per weight 4.1 % low, deformation 17 % high"});
+  c.fitted = true;
+  c.parameters = {parameter("/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", 0.15, 1500, true, 150, 1.52, 0.03)};
+  c.minima = 1, c.held_out = true, c.split = "leave one case out (2 folds)";
+  c.error_before_percent = 17.2, c.error_after_percent = 0.15, c.gain_percent = 99.1;
+  c.chi2 = 12.5, c.bic = 15.3, c.delta_bic = -2841.7, c.model_runs = 96, c.wall_time_s = 3.2;
+  return c;
+}
+
+CauseResult unfittedCause() {
+  return cause("sensor_gain", "a channel's gain off", "one channel's steady ratio off at every weight, frequency and damping unchanged",
+               {false, "frequency ratio 0.93 +- 0.01: changed, \"not a gain\""});
+}
+
+Diagnosis diagnosis() {
+  Diagnosis d;
+  analysis::WeightDropSignature light, heavy;
+  light.key = weight(0.125), heavy.key = weight(0.25);
+  light.force_ratio = {0.959, 0.004}, light.deformation_ratio = {1.17, 0.01}, light.frequency_ratio = {0.93, 0.002};
+  light.damping_difference = {0.0011, 0.0004};
+  light.force_per_weight_measured_N_per_kg = 4.39, light.force_per_weight_simulated_N_per_kg = 4.58;
+  heavy = light, heavy.key = weight(0.25), heavy.force_ratio = {0.961, 0.003};
+  d.signatures.weight_drops = {light, heavy};
+  analysis::SoilBinSignature bin;
+  bin.key = soilBin(40), bin.force_bias_percent = -37.5, bin.deformation_bias_percent = std::nan("");
+  bin.end_rise_difference = 0.02, bin.fluctuation_ratio = 0.8, bin.spectral_slope_measured = -1.1, bin.spectral_slope_simulated = -0.9;
+  d.signatures.soil_bins = {bin};
+  d.ranking = {fittedCause(), unfittedCause()};
+  d.cause = "clamp_compliance";
+  d.reason = "clamp_compliance cuts the held-out error by 99 %";
+  d.gain_percent = 99.1, d.baseline_error_percent = 17.2, d.baseline_chi2 = 2856, d.residual_count = 16, d.wall_time_s = 12;
+  return d;
+}
+
 }  // namespace
 
 TEST_CASE("calibrate's tables: every CSV cell equals its JSON value, the numbers given reach both", "[campaign][report]") {
@@ -104,60 +153,13 @@ TEST_CASE("calibrate's tables: every CSV cell equals its JSON value, the numbers
   CHECK(doc["wall_time_s"].get<double>() == Approx(1275.9));
 
   const std::string md = readText(dir / "out" / "report.md");
-  CHECK_THAT(md, Catch::Contains("| `/tools/0/fem/E_Pa` | 4.06e+09 | 4.4987e+09 | 2.8e+06 | 1e+09 - 1.6e+10 (log) |"));
-  CHECK_THAT(md, Catch::Contains("| `/tools/0/fem/alpha_s` | 0.00055 | unidentified | - | 1e-06 - 0.01 (log) |"));
-  CHECK_THAT(md, Catch::Contains("the calibrated study carries the best point found, 0.007,"));
-  CHECK_THAT(md, Catch::Contains("| PMMA, 0.5 kg weight | step_force_N | 2.45 | 0.01 | 2.31 | 2.449 | -0.1 |"));
-  CHECK_THAT(md, Catch::Contains("chi2 296 -> 0.02 over 2 quantities. NOT unique: 2 distinct minima"));
-  CHECK_THAT(md, Catch::Contains("Model runs 8 (cache hits 0, failed DEM runs 1), objective evaluations 8, wall time 1234.5 s."));
+  checkContains(md, {"| `/tools/0/fem/E_Pa` | 4.06e+09 | 4.4987e+09 | 2.8e+06 | 1e+09 - 1.6e+10 (log) |",
+                     "| `/tools/0/fem/alpha_s` | 0.00055 | unidentified | - | 1e-06 - 0.01 (log) |",
+                     "the calibrated study carries the best point found, 0.007,",
+                     "| PMMA, 0.5 kg weight | step_force_N | 2.45 | 0.01 | 2.31 | 2.449 | -0.1 |",
+                     "chi2 296 -> 0.02 over 2 quantities. NOT unique: 2 distinct minima",
+                     "Model runs 8 (cache hits 0, failed DEM runs 1), objective evaluations 8, wall time 1234.5 s."});
 }
-
-namespace {
-
-CauseResult fittedCause() {
-  CauseResult c;
-  c.id = "clamp_compliance";
-  c.description = "a rotational spring at the clamp, not a rigid root";
-  c.expected_signature = "force per weight lower, deformation larger, frequency lower";
-  c.match = {true, "force per weight 4.1 % low, deformation 17 % high"};
-  c.fitted = true;
-  c.parameters = {parameter("/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", 0.15, 1500, true, 150, 1.52, 0.03)};
-  c.minima = 1, c.held_out = true, c.split = "leave one case out (2 folds)";
-  c.error_before_percent = 17.2, c.error_after_percent = 0.15, c.gain_percent = 99.1;
-  c.chi2 = 12.5, c.bic = 15.3, c.delta_bic = -2841.7, c.model_runs = 96, c.wall_time_s = 3.2;
-  return c;
-}
-
-CauseResult unfittedCause() {
-  CauseResult c;
-  c.id = "sensor_gain";
-  c.description = "a channel's gain off";
-  c.expected_signature = "one channel's steady ratio off at every weight, frequency and damping unchanged";
-  c.match = {false, "frequency ratio 0.93 +- 0.01: changed, \"not a gain\""};
-  return c;
-}
-
-Diagnosis diagnosis() {
-  Diagnosis d;
-  analysis::WeightDropSignature light, heavy;
-  light.key = weight(0.125), heavy.key = weight(0.25);
-  light.force_ratio = {0.959, 0.004}, light.deformation_ratio = {1.17, 0.01}, light.frequency_ratio = {0.93, 0.002};
-  light.damping_difference = {0.0011, 0.0004};
-  light.force_per_weight_measured_N_per_kg = 4.39, light.force_per_weight_simulated_N_per_kg = 4.58;
-  heavy = light, heavy.key = weight(0.25), heavy.force_ratio = {0.961, 0.003};
-  d.signatures.weight_drops = {light, heavy};
-  analysis::SoilBinSignature bin;
-  bin.key = soilBin(40), bin.force_bias_percent = -37.5, bin.deformation_bias_percent = std::nan("");
-  bin.end_rise_difference = 0.02, bin.fluctuation_ratio = 0.8, bin.spectral_slope_measured = -1.1, bin.spectral_slope_simulated = -0.9;
-  d.signatures.soil_bins = {bin};
-  d.ranking = {fittedCause(), unfittedCause()};
-  d.cause = "clamp_compliance";
-  d.reason = "clamp_compliance cuts the held-out error by 99 %";
-  d.gain_percent = 99.1, d.baseline_error_percent = 17.2, d.baseline_chi2 = 2856, d.residual_count = 16, d.wall_time_s = 12;
-  return d;
-}
-
-}  // namespace
 
 TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, unfitted causes carry null numbers", "[campaign][report]") {
   TempDir dir("diagnose-report");
@@ -195,11 +197,11 @@ TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, unfitted cau
   CHECK(doc["signatures"]["soil_bins"][0]["deformation_bias_percent"].is_null());
 
   const std::string md = readText(dir / "out" / "report.md");
-  CHECK_THAT(md, Catch::Contains("| 1 | clamp_compliance | clamp_rotational_stiffness_Nm_per_rad = 1.52 +- 0.03 | yes | 17.2 | 0.15 | 99.1 | "
-                                 "-2842 | leave one case out (2 folds) |"));
-  CHECK_THAT(md, Catch::Contains("| - | sensor_gain | not fitted: signature absent |  |"));
-  CHECK_THAT(md, Catch::Contains("| 0.125 kg | 0.959 +- 0.004 | 1.17 +- 0.01 | 4.39 / 4.58 | 0.93 +- 0.002 | 0.0011 +- 0.0004 |"));
-  CHECK_THAT(md, Catch::Contains("| 40 mm | -37.5 | - | 0.02 | 0.8 | -1.1 / -0.9 |"));
+  checkContains(md, {"| 1 | clamp_compliance | clamp_rotational_stiffness_Nm_per_rad = 1.52 +- 0.03 | yes | 17.2 | 0.15 | 99.1 | "
+                      "-2842 | leave one case out (2 folds) |",
+                     "| - | sensor_gain | not fitted: signature absent |  |",
+                     "| 0.125 kg | 0.959 +- 0.004 | 1.17 +- 0.01 | 4.39 / 4.58 | 0.93 +- 0.002 | 0.0011 +- 0.0004 |",
+                     "| 40 mm | -37.5 | - | 0.02 | 0.8 | -1.1 / -0.9 |"});
 }
 
 TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an unfinished case has null run figures", "[campaign][report]") {
@@ -245,9 +247,9 @@ TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an un
   CHECK(s235["projected_full_scale_h"].get<double>() == Approx(1800.0 / 3600));
 
   const std::string md = readText(dir / "report" / "paper-reproduction.md");
-  CHECK_THAT(md, Catch::Contains("| pmma_coupled_30 | PMMA | DEM-FEM | 30 | "));
-  CHECK_THAT(md, Catch::Contains("| s235_dem_18 | S235 | DEM | 18 | "));
-  CHECK_THAT(md, Catch::Contains("| not finished |  |  |"));
-  CHECK_THAT(md, Catch::Contains("| pmma_coupled_30 | 2.00-2.10 | 2.10-2.30 | "));
-  CHECK_THAT(md, Catch::Contains("| s235_dem_18 | 44 | not finished | 0.5 (estimate) | 0.01 |"));
+  checkContains(md, {"| pmma_coupled_30 | PMMA | DEM-FEM | 30 | ",
+                     "| s235_dem_18 | S235 | DEM | 18 | ",
+                     "| not finished |  |  |",
+                     "| pmma_coupled_30 | 2.00-2.10 | 2.10-2.30 | ",
+                     "| s235_dem_18 | 44 | not finished | 0.5 (estimate) | 0.01 |"});
 }
