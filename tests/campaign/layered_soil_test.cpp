@@ -85,33 +85,34 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   // Every case at the three seeds LIGGGHTS ran: the model's seed scatter averages out like the
   // recordings'.
   const auto options = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, sharedSoilCache(), bin.seeds);
-  const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, nullptr);
+  const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, true);
 
   REQUIRE(outcome.depths.size() == 3);
+  for (const auto& d : outcome.depths) REQUIRE(d.single_layer);
   const auto& shallow = outcome.depths.front();
   const auto& deep = outcome.depths.back();
   for (const auto& d : outcome.depths)
     WARN(d.depth_mm << " mm, window mean of 3 seeds: LIGGGHTS " << d.liggghts.mean_N << " +- " << d.liggghts.sd_N
                     << " N, layered-soil preset " << d.calibrated.mean_N << " +- " << d.calibrated.sd_N << " N, one layer fitted at "
-                    << shallow.depth_mm << " mm " << d.single_layer.mean_N << " +- " << d.single_layer.sd_N << " N");
+                    << shallow.depth_mm << " mm " << d.single_layer->mean_N << " +- " << d.single_layer->sd_N << " N");
   // A failed prediction run has no draught: it is left out of the means (scored as 0 N it would pass
   // the under-prediction below for the wrong reason) and named; at least two seeds of every depth
   // ran (docs/calibration.md, "Not done yet": one such failure, not reproduced when rerun alone). The
   // model seed reaches the packing: the seeds' draughts differ.
   for (const auto& d : outcome.depths) {
-    if (d.calibrated.failed_runs + d.single_layer.failed_runs > 0)
-      WARN(d.depth_mm << " mm: failed runs, layered-soil preset " << d.calibrated.failed_runs << ", one layer " << d.single_layer.failed_runs);
+    if (d.calibrated.failed_runs + d.single_layer->failed_runs > 0)
+      WARN(d.depth_mm << " mm: failed runs, layered-soil preset " << d.calibrated.failed_runs << ", one layer " << d.single_layer->failed_runs);
     CHECK(bin.seeds - d.calibrated.failed_runs >= 2);
-    CHECK(bin.seeds - d.single_layer.failed_runs >= 2);
+    CHECK(bin.seeds - d.single_layer->failed_runs >= 2);
     CHECK(d.calibrated.sd_N > 0.01 * d.calibrated.mean_N);
   }
   REQUIRE(outcome.layered.stages.size() == 2);  // 20 mm: the top layer, 40 mm: the bottom layer; 55 mm adds none
   for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated.mean_N - d.liggghts.mean_N) <= twoStandardErrors(d.calibrated, d.liggghts));
   // One layer fitted at the shallowest depth matches it and under-predicts the deepest (the paper's
   // Section 2.10.2 finding: about 30 % low) by more than the seed scatter.
-  CHECK(std::abs(shallow.single_layer.mean_N - shallow.liggghts.mean_N) <= twoStandardErrors(shallow.single_layer, shallow.liggghts));
-  CHECK(deep.single_layer.mean_N < 0.85 * deep.liggghts.mean_N);
-  CHECK(deep.liggghts.mean_N - deep.single_layer.mean_N > twoStandardErrors(deep.single_layer, deep.liggghts));
+  CHECK(std::abs(shallow.single_layer->mean_N - shallow.liggghts.mean_N) <= twoStandardErrors(*shallow.single_layer, shallow.liggghts));
+  CHECK(deep.single_layer->mean_N < 0.85 * deep.liggghts.mean_N);
+  CHECK(deep.liggghts.mean_N - deep.single_layer->mean_N > twoStandardErrors(*deep.single_layer, deep.liggghts));
 }
 
 TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-layer study names layered_soil",
