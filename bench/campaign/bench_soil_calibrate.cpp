@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
   campaign::test::LayeredBin bin;
   bool ci_bin = false, single_layer = false;
   int max_evaluations = 12, model_seeds = 3;
-  double window_begin_mm = 50;
+  double window_begin_mm = campaign::test::kSmallBinWindowBeginMm;
   std::string out_dir = "bench-soil", recordings_dir;
   app.add_flag("--ci-bin", ci_bin, "The physics test's bin (100 x 140 mm, 40 mm stroke, window from 10 mm) instead of the small bin (100 x 330 mm, 200 mm stroke)");
   app.add_option("--seeds", bin.seeds, "LIGGGHTS deposition seeds (1..5); the prediction runs the model at the same seeds")
@@ -105,17 +105,19 @@ int main(int argc, char** argv) {
   app.add_option("--jobs", bin.jobs, "Runs at once (LIGGGHTS processes; cases of one evaluation)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--max-evaluations", max_evaluations, "Objective evaluations per fit")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--model-seeds", model_seeds, "Deposition seeds each built-in case of the fit runs at")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--window-begin-mm", window_begin_mm, "Start of the statistics window (it ends with the stroke)")->capture_default_str();
+  app.add_option("--window-begin-mm", window_begin_mm, "Start of the statistics window (it ends with the stroke; default 10 mm with --ci-bin)")
+      ->capture_default_str();
   app.add_option("--out", out_dir, "Working directory (LIGGGHTS runs, soils, run cache)")->capture_default_str();
   app.add_option("--recordings", recordings_dir, "Use the LIGGGHTS recordings of an earlier run in this directory instead of running LIGGGHTS")
       ->check(CLI::ExistingDirectory);
   app.add_flag("--single-layer", single_layer, "Also fit one layer at the shallowest depth and predict every depth with it");
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
-    if (ci_bin) {
-      window_begin_mm = 10;
-    } else {
-      bin.length_m = 0.33, bin.stroke_m = 0.2;
+    if (!app.count("--window-begin-mm")) window_begin_mm = ci_bin ? campaign::test::kCiBinWindowBeginMm : campaign::test::kSmallBinWindowBeginMm;
+    if (!ci_bin) {
+      const int seeds = bin.seeds, jobs = bin.jobs;
+      bin = campaign::test::smallBin();
+      bin.seeds = seeds, bin.jobs = jobs;
     }
     const fs::path out(out_dir);
     fs::create_directories(out);
@@ -134,7 +136,11 @@ int main(int argc, char** argv) {
     }
     const double liggghts_s = bench::secondsSince(start), liggghts_cpu_s = bench::cpuSeconds() - cpu_start;
     const auto recordings = analysis::readRecordings(files);
-    const auto options = campaign::test::layeredSoilOptions(bin, window_begin_mm, max_evaluations, out / "runs", model_seeds);
+    auto options = campaign::test::layeredSoilOptions(bin, window_begin_mm, max_evaluations, out / "runs", model_seeds);
+    options.on_progress = [](const campaign::CalibrationProgress& p) {
+      std::fprintf(stderr, "fit: evaluation %d/%d, best chi2 %.4g, %.0f s elapsed, about %.0f s left in this fit\n", p.evaluation, p.max_evaluations,
+                   p.best_chi2, p.elapsed_s, p.eta_s);
+    };
     std::fprintf(stderr, "calibrating (at most %d evaluations per fit)\n", max_evaluations);
     const std::size_t runs_before = cachedRuns(options.cache_dir);
     const auto t = Clock::now();

@@ -148,6 +148,12 @@ nlohmann::json caseLabels(const std::vector<analysis::CaseKey>& cases) {
   return labels;
 }
 
+nlohmann::json seedScatterJson(const std::vector<SeedScatter>& scatter) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const SeedScatter& s : scatter) out.push_back({{"case", s.key.title()}, {"quantity", s.quantity}, {"sd", s.sd}, {"seeds", s.seeds}});
+  return out;
+}
+
 }  // namespace
 
 nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, const std::string& extended_study_path) {
@@ -161,10 +167,13 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
           {"baseline_chi2", d.baseline_chi2},
           {"failed_baseline_cases", caseLabels(d.failed_baseline_cases)},
           {"residuals", d.residual_count},
+          {"seed_scatter", seedScatterJson(d.seed_scatter)},
+          {"seed_scatter_error_percent", d.seed_scatter_error_percent},
           {"thresholds",
            {{"min_error_percent", settings.min_error_percent},
             {"min_gain_percent", settings.min_gain_percent},
-            {"min_delta_bic", settings.min_delta_bic}}},
+            {"min_delta_bic", settings.min_delta_bic},
+            {"scatter_seeds", settings.scatter_seeds}}},
           {"ranking", ranking},
           {"signatures", analysis::toJson(d.signatures)},
           {"extended_study", extended_study_path},
@@ -179,6 +188,10 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   if (d.cause) md += "Held-out error cut by the extension: " + number(d.gain_percent) + " %. The extended study is `extended_study.json`.\n\n";
   md += "Baseline (the study as given) against all cases: error " + number(d.baseline_error_percent) + " % (RMS of 100 (sim - meas) / meas " +
         "over every quantity of every case), chi2 " + number(d.baseline_chi2) + " over " + std::to_string(d.residual_count) + " residuals.\n\n";
+  if (!d.seed_scatter.empty())
+    md += "The model's own seed scatter (the baseline at " + std::to_string(settings.scatter_seeds) +
+          " deposition seeds) alone gives an error of " + number(d.seed_scatter_error_percent) +
+          " %; it widens the sigma of every BIC (docs/diagnosis.md).\n\n";
   if (!d.failed_baseline_cases.empty())
     md += "Left out of every error and BIC: the cases whose baseline run failed (DEM blow-up): " +
           caseLabels(d.failed_baseline_cases).dump() + ".\n\n";

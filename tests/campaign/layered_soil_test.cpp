@@ -15,7 +15,7 @@ using namespace demfem;
 
 namespace {
 
-constexpr double kWindowBeginMm = 10;  // to the stroke's end, 40 mm (liggghts_layered_bin.hpp)
+constexpr double kWindowBeginMm = campaign::test::kCiBinWindowBeginMm;  // to the stroke's end, 40 mm
 
 // The soil test cases' shared caches in the build directory: settled soils ($DEMFEM_SOIL_DIR, set
 // here) and model runs (the returned run-cache directory; RunCache keys a run by study, deposition

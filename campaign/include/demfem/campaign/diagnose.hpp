@@ -21,6 +21,12 @@
 //  5. Information criterion: BIC = chi2 + k ln n with chi2 of the fit on all cases (objective.hpp:
 //     residuals normalised by the measured scatter, so chi2 is -2 ln L up to a constant), k the
 //     extension's parameters, n the residuals; delta_bic = BIC - chi2 of the baseline (k = 0).
+//     Soil-bin cases: a DEM run is one random packing, so the model has a seed scatter of its own.
+//     The baseline also runs at settings.scatter_seeds deposition seeds (the study's and the next
+//     ones); per case and quantity their standard deviation s_model (seed_scatter) widens the
+//     residuals' sigma of the BIC to sqrt(sigma^2 + s_model^2 / M), M the fits' model seeds
+//     (calibration.model_seeds): a fit that only absorbs the packing of the seeds it runs earns no
+//     evidence.
 //  6. Ranking: by held-out error after (ascending; in-sample for causes ranked on all cases), ties by
 //     delta_bic. The first cause is named when all hold: the baseline error on all cases is at least
 //     min_error_percent (below it the model already agrees with the recordings as well as two
@@ -66,6 +72,7 @@ struct DiagnosisSettings {
   double min_error_percent = 5.0;
   double min_gain_percent = 50.0;
   double min_delta_bic = 10.0;
+  int scatter_seeds = 3;  // soil-bin cases: deposition seeds of the baseline's seed scatter (1: none)
   std::function<void(const std::string&)> on_stage;  // "fitting clamp_compliance, fold 2/2", for progress
 };
 
@@ -90,6 +97,16 @@ struct CauseResult {
   std::vector<analysis::Recording> runs;     // the extended model's runs (fit on all cases)
 };
 
+// The model's own seed scatter of one quantity of one case (step 5 of the header comment): the
+// sample standard deviation of the baseline's value over `seeds` deposition seeds, in the quantity's
+// unit.
+struct SeedScatter {
+  analysis::CaseKey key;
+  std::string quantity;
+  double sd = 0.0;
+  int seeds = 0;
+};
+
 struct Diagnosis {
   analysis::Signatures signatures;
   std::vector<Residual> baseline_residuals;
@@ -97,7 +114,9 @@ struct Diagnosis {
   std::vector<analysis::Recording> measured;
   double baseline_error_percent = 0.0;      // all cases whose baseline runs ran
   std::vector<analysis::CaseKey> failed_baseline_cases;  // a baseline run failed: left out of every error and BIC
-  double baseline_chi2 = 0.0;
+  double baseline_chi2 = 0.0;               // residuals normalised by the measured scatter only
+  std::vector<SeedScatter> seed_scatter;     // soil-bin quantities (empty without soil cases or scatter_seeds < 2)
+  double seed_scatter_error_percent = 0.0;   // RMS of 100 s_model / (sqrt(M) measured): a correct model's error from its packing alone
   int residual_count = 0;
   std::vector<CauseResult> ranking;         // fitted causes ranked first, then the others
   std::optional<std::string> cause;         // the named cause
