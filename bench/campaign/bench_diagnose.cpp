@@ -133,7 +133,7 @@ nlohmann::json soilBin(const SoilOptions& o) {
 
   int runs = 0;
   const nlohmann::json causes = causesTable(d, runs);
-  std::printf("baseline error %.2f %% (the model's seed scatter alone: %.2f %%)\n", d.baseline_error_percent, d.seed_scatter_error_percent);
+  std::printf("baseline error %.2f %% (a correct model from the scatter alone: %.2f %%)\n", d.baseline_error_percent, d.noise_error_percent);
   std::printf("named cause: %s (%s)\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str());
   std::printf("%-40s %12s %12s\n", "step", "wall (s)", "CPU (s)");
   std::printf("%-40s %12.0f %12.0f\n", "LIGGGHTS fixture", liggghts_s, liggghts_cpu_s);

@@ -133,27 +133,27 @@ const SeedScatter* scatterOf(const std::vector<SeedScatter>& scatter, const Resi
   return it == scatter.end() ? nullptr : &*it;
 }
 
-// chi2 of `residuals` with each sigma widened by the model's seed scatter of a mean over
-// `model_seeds` runs, sqrt(sigma^2 + s_model^2 / M) (diagnose.hpp, step 5).
+// A residual's sigma widened by the model's seed scatter of a mean over `model_seeds` runs,
+// sqrt(sigma^2 + s_model^2 / M) (diagnose.hpp, step 5): the scatter of a correct model's residual.
+double widenedSigma(const Residual& r, const std::vector<SeedScatter>& scatter, int model_seeds) {
+  const SeedScatter* s = scatterOf(scatter, r);
+  return std::sqrt(r.sigma * r.sigma + (s ? s->sd * s->sd / std::max(1, model_seeds) : 0.0));
+}
+
 double chi2WithScatter(const std::vector<Residual>& residuals, const std::vector<SeedScatter>& scatter, int model_seeds) {
   double sum = 0;
-  for (const Residual& r : residuals) {
-    const SeedScatter* s = scatterOf(scatter, r);
-    const double var = r.sigma * r.sigma + (s ? s->sd * s->sd / std::max(1, model_seeds) : 0.0);
-    sum += (r.simulated - r.measured) * (r.simulated - r.measured) / var;
-  }
+  for (const Residual& r : residuals) sum += std::pow((r.simulated - r.measured) / widenedSigma(r, scatter, model_seeds), 2);
   return sum;
 }
 
-// RMS over the residuals' quantities of 100 s_model / (sqrt(M) measured), percent.
-double scatterErrorPercent(const std::vector<Residual>& residuals, const std::vector<SeedScatter>& scatter, int model_seeds) {
+// The error a correct model shows from the scatter alone (diagnose.hpp, step 4): RMS over the
+// residuals of 100 widenedSigma / |measured|, percent.
+double noiseErrorPercent(const std::vector<Residual>& residuals, const std::vector<SeedScatter>& scatter, int model_seeds) {
   double sum = 0;
   int n = 0;
   for (const Residual& r : residuals) {
-    const SeedScatter* s = scatterOf(scatter, r);
-    if (!s || r.measured == 0) continue;
-    const double e = 100 * s->sd / std::sqrt(static_cast<double>(std::max(1, model_seeds))) / r.measured;
-    sum += e * e;
+    if (r.measured == 0) continue;
+    sum += std::pow(100 * widenedSigma(r, scatter, model_seeds) / r.measured, 2);
     ++n;
   }
   return n > 0 ? std::sqrt(sum / n) : 0.0;
@@ -208,10 +208,14 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
   r.error_before_percent = errorPercent(before);
   const std::vector<Residual> after = comparable(r.held_out ? folds.held_out : all.residuals, base.failed_baseline_cases);
   r.error_after_percent = errorPercent(after);
-  r.gain_percent = r.error_before_percent > 0 ? 100 * (r.error_before_percent - r.error_after_percent) / r.error_before_percent : 0.0;
+  const int m = settings.calibration.model_seeds;
+  r.noise_error_percent = noiseErrorPercent(before, base.seed_scatter, m);
+  // An error below the noise's is not resolved: what an extension cuts beneath it is the packing of
+  // the seeds it ran, not the cause.
+  const double resolved_after = std::max(r.error_after_percent, r.noise_error_percent);
+  r.gain_percent = r.error_before_percent > 0 ? 100 * (r.error_before_percent - resolved_after) / r.error_before_percent : 0.0;
   const std::vector<Residual> fitted_all = comparable(all.residuals, base.failed_baseline_cases);
   const double n = static_cast<double>(fitted_all.size());
-  const int m = settings.calibration.model_seeds;
   r.bic = chi2WithScatter(fitted_all, base.seed_scatter, m) + static_cast<double>(e.parameters.size()) * std::log(n);
   r.delta_bic = r.bic - chi2WithScatter(before_all, base.seed_scatter, m);
   r.wall_time_s = secondsSince(start);
@@ -298,7 +302,7 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   d.residual_count = static_cast<int>(d.baseline_residuals.size());
   if (settings.on_stage && settings.scatter_seeds > 1) settings.on_stage("the model's seed scatter");
   d.seed_scatter = seedScatter(study, origin, recordings, model, whole_stroke, settings.scatter_seeds);
-  d.seed_scatter_error_percent = scatterErrorPercent(ran, d.seed_scatter, settings.calibration.model_seeds);
+  d.noise_error_percent = noiseErrorPercent(ran, d.seed_scatter, settings.calibration.model_seeds);
   const analysis::ComparisonResult comparison = analysis::compare(recordings, d.baseline_runs, settings.calibration.objective.analysis);
   d.signatures = analysis::signaturesOf(comparison, settings.signatures);
   for (const Cause* c : causes) d.ranking.push_back(assess(*c, d, study, origin, recordings, model, settings));

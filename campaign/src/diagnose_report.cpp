@@ -44,6 +44,7 @@ nlohmann::json causeJson(const CauseResult& c) {
   j["split"] = c.split;
   j["error_before_percent"] = c.error_before_percent;
   j["error_after_percent"] = c.error_after_percent;
+  j["noise_error_percent"] = c.noise_error_percent;
   j["gain_percent"] = c.gain_percent;
   j["chi2"] = c.chi2;
   j["bic"] = c.bic;
@@ -168,7 +169,7 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
           {"failed_baseline_cases", caseLabels(d.failed_baseline_cases)},
           {"residuals", d.residual_count},
           {"seed_scatter", seedScatterJson(d.seed_scatter)},
-          {"seed_scatter_error_percent", d.seed_scatter_error_percent},
+          {"noise_error_percent", d.noise_error_percent},
           {"thresholds",
            {{"min_error_percent", settings.min_error_percent},
             {"min_gain_percent", settings.min_gain_percent},
@@ -188,10 +189,10 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   if (d.cause) md += "Held-out error cut by the extension: " + number(d.gain_percent) + " %. The extended study is `extended_study.json`.\n\n";
   md += "Baseline (the study as given) against all cases: error " + number(d.baseline_error_percent) + " % (RMS of 100 (sim - meas) / meas " +
         "over every quantity of every case), chi2 " + number(d.baseline_chi2) + " over " + std::to_string(d.residual_count) + " residuals.\n\n";
-  if (!d.seed_scatter.empty())
-    md += "The model's own seed scatter (the baseline at " + std::to_string(settings.scatter_seeds) +
-          " deposition seeds) alone gives an error of " + number(d.seed_scatter_error_percent) +
-          " %; it widens the sigma of every BIC (docs/diagnosis.md).\n\n";
+  md += "Noise: a correct model would show an error of " + number(d.noise_error_percent) + " % from the measured scatter" +
+        (d.seed_scatter.empty() ? std::string() : " and the model's own seed scatter (the baseline at " + std::to_string(settings.scatter_seeds) +
+                                                      " deposition seeds), which also widens the sigma of every BIC") +
+        "; an error below it is not counted as gain (docs/diagnosis.md).\n\n";
   if (!d.failed_baseline_cases.empty())
     md += "Left out of every error and BIC: the cases whose baseline run failed (DEM blow-up): " +
           caseLabels(d.failed_baseline_cases).dump() + ".\n\n";

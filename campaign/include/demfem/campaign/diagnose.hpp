@@ -17,7 +17,10 @@
 //     force and deformation, frequency, damping ratio; window means and spreads) of the relative
 //     difference 100 (sim - meas) / meas, in percent; a set of cases: the RMS over all their
 //     quantities. Held-out error before = the baseline's on the held-out cases, after = the
-//     extended model's from the folds.
+//     extended model's from the folds. Noise error: the error a correct model shows from the
+//     scatter alone, the RMS over the same quantities of 100 sigma_w / |measured| with sigma_w the
+//     widened sigma of step 5; an error after below it is not resolved, so the gain is
+//     100 (before - max(after, noise)) / before.
 //  5. Information criterion: BIC = chi2 + k ln n with chi2 of the fit on all cases (objective.hpp:
 //     residuals normalised by the measured scatter, so chi2 is -2 ln L up to a constant), k the
 //     extension's parameters, n the residuals; delta_bic = BIC - chi2 of the baseline (k = 0).
@@ -31,7 +34,7 @@
 //     delta_bic. The first cause is named when all hold: the baseline error on all cases is at least
 //     min_error_percent (below it the model already agrees with the recordings as well as two
 //     independent correct models of the tool agree with each other, docs/diagnosis.md), its gain
-//     100 (before - after) / before is at least min_gain_percent, and delta_bic <= -min_delta_bic.
+//     (step 4) is at least min_gain_percent, and delta_bic <= -min_delta_bic.
 //     Otherwise the verdict is "no significant discrepancy" with the reason.
 // - Every model run goes through the calibration's run cache (options.cache_dir).
 // - Throws ArgumentError for unusable input (no candidate cause, a named cause unknown, a case the
@@ -88,7 +91,8 @@ struct CauseResult {
   std::string split;                         // how the error after was obtained
   double error_before_percent = 0.0;         // held-out cases (or all cases), baseline
   double error_after_percent = 0.0;          // the same cases, extended model
-  double gain_percent = 0.0;
+  double noise_error_percent = 0.0;          // the same cases, a correct model's error from the scatter alone (step 4)
+  double gain_percent = 0.0;                 // 100 (before - max(after, noise)) / before
   double chi2 = 0.0, bic = 0.0, delta_bic = 0.0;
   int model_runs = 0;
   double wall_time_s = 0.0;
@@ -116,7 +120,7 @@ struct Diagnosis {
   std::vector<analysis::CaseKey> failed_baseline_cases;  // a baseline run failed: left out of every error and BIC
   double baseline_chi2 = 0.0;               // residuals normalised by the measured scatter only
   std::vector<SeedScatter> seed_scatter;     // soil-bin quantities (empty without soil cases or scatter_seeds < 2)
-  double seed_scatter_error_percent = 0.0;   // RMS of 100 s_model / (sqrt(M) measured): a correct model's error from its packing alone
+  double noise_error_percent = 0.0;          // all cases whose baseline ran: a correct model's error from the scatter alone (step 4)
   int residual_count = 0;
   std::vector<CauseResult> ranking;         // fitted causes ranked first, then the others
   std::optional<std::string> cause;         // the named cause
