@@ -64,8 +64,8 @@ void warnRanking(const campaign::Diagnosis& d) {
   CHECK(d.failed_baseline_cases.empty());
   for (const auto& c : d.ranking)
     if (c.fitted)
-      WARN(c.id << ": held-out error " << c.error_before_percent << " % -> " << c.error_after_percent << " % (" << c.split << "), delta BIC "
-                << c.delta_bic);
+      WARN(c.id << ": held-out error " << c.error_before_percent << " % -> " << c.error_after_percent << " % (noise " << c.noise_error_percent
+                << " %; " << c.split << "), gain " << c.gain_percent << " %, delta BIC " << c.delta_bic);
 }
 
 // The diagnosis' fits: one model seed each and 8 evaluations per fit, to fit CI's time (the
@@ -131,18 +131,21 @@ TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-la
   CHECK(d.gain_percent >= 50);
 }
 
-// Hidden (not run by ctest): at one model seed it named end_wall (held-out error 24.7 % -> 9.4 %,
-// gain 62 %) where an earlier run found no significant discrepancy (17.6 %): one model seed is one
-// packing shared by every depth, whose deviation from the recordings' three-seed means a fold's fit
-// carries over to the held-out depth. The recordings' three seeds would triple its cost beyond CI's
-// (docs/diagnosis.md, soil). Run it with `campaign_soil_tests "[uniform-diagnosis]"`.
+// Hidden (not run by ctest, to keep CI's time: about 400 s of processor time with its own LIGGGHTS
+// fixture). At one model seed a fold's fit carries the packing shared by every depth over to the
+// held-out depth: end_wall cut the held-out error 24.7 % -> 11.5 %, below the 17.5 % a correct model
+// shows from the measured and the model's own seed scatter (diagnose.hpp, steps 4 and 5), so the
+// gain above that noise is 29 % (docs/diagnosis.md, soil). Run it with
+// `campaign_soil_tests "[uniform-diagnosis]"`.
 TEST_CASE("soil against LIGGGHTS: diagnose of a single-layer bin with the same single-layer study finds no significant discrepancy",
           "[campaign][physics][.][uniform-diagnosis]") {
   campaign::test::LayeredBin bin;
   bin.uniform_friction = 0.5;  // the single-layer study's friction (tests/campaign/data/single_layer_bin.json)
   const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin),
                                                      campaign::test::singleLayerStudy(bin, std::nullopt));
-  WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent << " %");
+  WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent
+                     << " %, noise error " << d.noise_error_percent << " %");
   warnRanking(d);
+  CHECK(d.seed_scatter.size() == 6);  // window mean and spread at three depths
   CHECK_FALSE(d.cause);
 }
