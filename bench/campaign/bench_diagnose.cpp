@@ -1,25 +1,30 @@
-// Diagnosis benchmark (docs/diagnosis.md, section Cost): the wall and processor time of a weight-drop
-// diagnosis of the paper's PMMA tool (0.5 and 1 kg, two repeats each) on recordings the project's
-// modal model made with a compliant clamp (k_theta = --clamp-ei-l times the free part's EI/L) and
-// DAQ noise, every cause of the catalogue fitted. Prints a table per cause; --json writes the same.
+// Diagnosis benchmark (docs/diagnosis.md, section Cost): the wall and processor time of
+// - a weight-drop diagnosis of the paper's PMMA tool (0.5 and 1 kg, two repeats each) on recordings
+//   the project's modal model made with a compliant clamp (k_theta = --clamp-ei-l times the free
+//   part's EI/L) and DAQ noise, every cause of the catalogue fitted (default);
+// - with --soil-bin: a soil diagnosis of the small bin (tests/campaign/liggghts_layered_bin.hpp:
+//   about 2,570 particles, 200 mm stroke, depths 20, 40, 55 mm) on recordings LIGGGHTS itself made
+//   from the deck kept with the tests, the hidden effect the two layers (friction 0.2 above, 0.9
+//   below; --uniform-friction F: one layer at F, the null case), diagnosed with the single-layer
+//   built-in study at --study-friction (default: the deck's top layer, 0.2; with
+//   --uniform-friction: F).
+// Prints a table per cause; --json writes the same.
+#include "bench_timing.hpp"
 #include "demfem/campaign/diagnose.hpp"
 #include "demfem/cli/cli_support.hpp"
+#include "layered_soil_study.hpp"
 #include "truth_recordings.hpp"
 
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
-#include <ctime>
+#include <cstdlib>
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 using namespace demfem;
-
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-double cpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+using bench::Clock;
 
 // EI / L of the tool's free part (below the clamp), N m/rad.
 double freePartEiOverL(const nlohmann::ordered_json& tool) {
@@ -28,67 +33,159 @@ double freePartEiOverL(const nlohmann::ordered_json& tool) {
   return E * (W * 1e-3) * std::pow(T * 1e-3, 3) / 12 / (L * 1e-3);
 }
 
+struct SoilOptions {
+  bool ci_bin = false;
+  std::optional<double> uniform_friction, study_friction;
+  int seeds = 3, jobs = 2, model_seeds = 1, max_evaluations = 8;
+  std::string out = "bench-diagnose-soil", recordings;
+};
+
+// The causes' table (printed) and JSON; the sum of their model runs.
+nlohmann::json causesTable(const campaign::Diagnosis& d, int& runs) {
+  std::printf("%-20s %10s %12s %14s %14s %12s\n", "cause", "runs", "wall (s)", "before (%)", "after (%)", "delta BIC");
+  nlohmann::json causes = nlohmann::json::array();
+  runs = 0;
+  for (const auto& c : d.ranking) {
+    if (!c.fitted) continue;
+    runs += c.model_runs;
+    std::printf("%-20s %10d %12.2f %14.2f %14.2f %12.1f\n", c.id.c_str(), c.model_runs, c.wall_time_s, c.error_before_percent,
+                c.error_after_percent, c.delta_bic);
+    causes.push_back({{"id", c.id},
+                      {"model_runs", c.model_runs},
+                      {"wall_s", c.wall_time_s},
+                      {"error_before_percent", c.error_before_percent},
+                      {"error_after_percent", c.error_after_percent},
+                      {"delta_bic", c.delta_bic}});
+  }
+  return causes;
+}
+
+nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, int jobs) {
+  const nlohmann::ordered_json study = cli::readJsonFile(study_file);
+  nlohmann::ordered_json truth = study;
+  const double k_true = clamp_ei_l * freePartEiOverL(study["tools"][0]);
+  truth["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = k_true;
+  const fs::path dir = fs::temp_directory_path() / ("demfem-bench-diagnose-" + std::to_string(getpid()));
+  fs::create_directories(dir / "recordings");
+  std::fprintf(stderr, "writing the recordings (k_theta = %.4g N m/rad)\n", k_true);
+  auto t = Clock::now();
+  bench::writeTruth(truth, study_file, dir / "recordings");
+  const double recordings_s = bench::secondsSince(t);
+  const auto recordings = analysis::readRecordings({dir / "recordings"});
+
+  campaign::DiagnosisSettings settings;
+  settings.calibration.jobs = jobs;
+  settings.calibration.kind = campaign::ObjectiveKind::Smooth;
+  settings.calibration.cache_dir = dir / "runs";
+  const auto start = Clock::now();
+  settings.on_stage = [start](const std::string& stage) { std::fprintf(stderr, "diagnose: %s (%.0f s elapsed)\n", stage.c_str(), bench::secondsSince(start)); };
+  const auto model = campaign::makeModel(study::parseStudy(study.dump(), study_file));
+  t = Clock::now();
+  const double c0 = bench::cpuSeconds();
+  const campaign::Diagnosis d = campaign::diagnose(study, study_file, recordings, *model, settings);
+  const double wall_s = bench::secondsSince(t), cpu_s = bench::cpuSeconds() - c0;
+  fs::remove_all(dir);
+
+  int runs = 0;
+  const nlohmann::json causes = causesTable(d, runs);
+  std::printf("%-20s %10d %12.2f   (processor %.1f s, recordings %.1f s)\n", "whole diagnosis", runs, wall_s, cpu_s, recordings_s);
+  std::printf("named cause: %s\n", d.cause ? d.cause->c_str() : "no significant discrepancy");
+  return {{"study", study_file},
+          {"clamp_true_Nm_per_rad", k_true},
+          {"jobs", jobs},
+          {"recordings_s", recordings_s},
+          {"diagnosis_wall_s", wall_s},
+          {"diagnosis_cpu_s", cpu_s},
+          {"cause", d.cause ? nlohmann::json(*d.cause) : nlohmann::json(nullptr)},
+          {"causes", causes}};
+}
+
+nlohmann::json soilBin(const SoilOptions& o) {
+  campaign::test::LayeredBin bin = o.ci_bin ? campaign::test::LayeredBin{} : campaign::test::smallBin();
+  bin.seeds = o.seeds, bin.jobs = o.jobs, bin.uniform_friction = o.uniform_friction;
+  const fs::path out(o.out);
+  fs::create_directories(out);
+  if (!std::getenv("DEMFEM_SOIL_DIR") && ::setenv("DEMFEM_SOIL_DIR", (out / "soil").c_str(), 1) != 0)
+    throw std::runtime_error("cannot set DEMFEM_SOIL_DIR to " + (out / "soil").string());
+  const double load_before = bench::loadAverage();
+  const auto start = Clock::now();
+  const double cpu_start = bench::cpuSeconds();
+  std::vector<fs::path> files;
+  if (o.recordings.empty()) {
+    std::fprintf(stderr, "LIGGGHTS: %d depositions, %zu drags\n", bin.seeds, bin.depths_mm.size() * static_cast<std::size_t>(bin.seeds));
+    files = campaign::test::runLayeredBin(bin, out / "liggghts");
+  } else {
+    files.push_back(o.recordings);
+  }
+  const double liggghts_s = bench::secondsSince(start), liggghts_cpu_s = bench::cpuSeconds() - cpu_start;
+  const auto recordings = analysis::readRecordings(files);
+
+  campaign::DiagnosisSettings settings;
+  const double window_begin_mm = o.ci_bin ? campaign::test::kCiBinWindowBeginMm : campaign::test::kSmallBinWindowBeginMm;
+  settings.calibration = campaign::test::layeredSoilOptions(bin, window_begin_mm, o.max_evaluations, out / "runs", o.model_seeds);
+  const auto t = Clock::now();
+  settings.on_stage = [t](const std::string& stage) { std::fprintf(stderr, "diagnose: %s (%.0f s elapsed)\n", stage.c_str(), bench::secondsSince(t)); };
+  const double cpu_t = bench::cpuSeconds();
+  const std::optional<double> friction = o.study_friction ? o.study_friction : o.uniform_friction ? o.uniform_friction : std::optional(0.2);
+  const auto d = campaign::test::diagnoseSingleLayer(bin, recordings, settings, campaign::test::singleLayerStudy(bin, friction));
+  const double wall_s = bench::secondsSince(t), cpu_s = bench::cpuSeconds() - cpu_t;
+  const double load_after = bench::loadAverage();
+
+  int runs = 0;
+  const nlohmann::json causes = causesTable(d, runs);
+  std::printf("baseline error %.2f %% (a correct model from the scatter alone: %.2f %%)\n", d.baseline_error_percent, d.noise_error_percent);
+  std::printf("named cause: %s (%s)\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str());
+  std::printf("%-40s %12s %12s\n", "step", "wall (s)", "CPU (s)");
+  std::printf("%-40s %12.0f %12.0f\n", "LIGGGHTS fixture", liggghts_s, liggghts_cpu_s);
+  std::printf("%-40s %12.0f %12.0f   (%d model runs in the fits)\n", "diagnosis", wall_s, cpu_s, runs);
+  std::printf("load average (1 min): %.2f before, %.2f after\n", load_before, load_after);
+  return {{"bin_mm", {bin.width_m * 1000, bin.length_m * 1000, bin.fill_m * 1000}},
+          {"stroke_mm", bin.stroke_m * 1000},
+          {"depths_mm", bin.depths_mm},
+          {"liggghts_seeds", bin.seeds},
+          {"uniform_friction", o.uniform_friction ? nlohmann::json(*o.uniform_friction) : nlohmann::json(nullptr)},
+          {"study_friction", *friction},
+          {"model_seeds", o.model_seeds},
+          {"max_evaluations", o.max_evaluations},
+          {"jobs", o.jobs},
+          {"liggghts_wall_s", liggghts_s},
+          {"liggghts_cpu_s", liggghts_cpu_s},
+          {"diagnosis_wall_s", wall_s},
+          {"diagnosis_cpu_s", cpu_s},
+          {"fit_model_runs", runs},
+          {"load_average_before", load_before},
+          {"load_average_after", load_after},
+          {"causes", causes},
+          {"diagnosis", campaign::toJson(d, settings, "")}};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"demfem-bench-diagnose: cost of a weight-drop diagnosis of the paper tool with compliant-clamp recordings"};
+  CLI::App app{"demfem-bench-diagnose: cost of a diagnosis: the paper tool with compliant-clamp recordings, or (--soil-bin) the small soil bin against LIGGGHTS"};
   app.name("demfem-bench-diagnose");
   std::string study_file = std::string(DEMFEM_SOURCE_DIR) + "/studies/weight_drop_1kg.json";
   double clamp_ei_l = 3.0;
   int jobs = 2;
+  bool soil_bin = false;
+  SoilOptions soil;
   app.add_option("--study", study_file, "weight-drop study of the tool")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--clamp-ei-l", clamp_ei_l, "the recordings' clamp spring in units of EI/L")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--jobs", jobs, "cases run concurrently")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--jobs", jobs, "cases run concurrently (with --soil-bin also LIGGGHTS processes)")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_flag("--soil-bin", soil_bin, "The soil diagnosis of the small bin against LIGGGHTS instead of the weight drop");
+  app.add_flag("--ci-bin", soil.ci_bin, "--soil-bin: the physics test's bin (100 x 140 mm, 40 mm stroke) instead of the small bin");
+  app.add_option("--uniform-friction", soil.uniform_friction, "--soil-bin: one layer at this friction in the deck (the null case)")->check(CLI::Range(0.05, 1.5));
+  app.add_option("--study-friction", soil.study_friction, "--soil-bin: friction of the single-layer study (default 0.2, or --uniform-friction)")
+      ->check(CLI::Range(0.05, 1.5));
+  app.add_option("--seeds", soil.seeds, "--soil-bin: LIGGGHTS deposition seeds (1..5)")->check(CLI::Range(1, 5))->capture_default_str();
+  app.add_option("--model-seeds", soil.model_seeds, "--soil-bin: deposition seeds of every fit's runs")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--max-evaluations", soil.max_evaluations, "--soil-bin: objective evaluations per fit")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--out", soil.out, "--soil-bin: working directory (LIGGGHTS runs, soils, run cache)")->capture_default_str();
+  app.add_option("--recordings", soil.recordings, "--soil-bin: the LIGGGHTS recordings of an earlier run in this directory")->check(CLI::ExistingDirectory);
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
-    const nlohmann::ordered_json study = cli::readJsonFile(study_file);
-    nlohmann::ordered_json truth = study;
-    const double k_true = clamp_ei_l * freePartEiOverL(study["tools"][0]);
-    truth["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = k_true;
-    const fs::path dir = fs::temp_directory_path() / ("demfem-bench-diagnose-" + std::to_string(getpid()));
-    fs::create_directories(dir / "recordings");
-    std::fprintf(stderr, "writing the recordings (k_theta = %.4g N m/rad)\n", k_true);
-    auto t = Clock::now();
-    bench::writeTruth(truth, study_file, dir / "recordings");
-    const double recordings_s = secondsSince(t);
-    const auto recordings = analysis::readRecordings({dir / "recordings"});
-
-    campaign::DiagnosisSettings settings;
-    settings.calibration.jobs = jobs;
-    settings.calibration.kind = campaign::ObjectiveKind::Smooth;
-    settings.calibration.cache_dir = dir / "runs";
-    const auto start = Clock::now();
-    settings.on_stage = [start](const std::string& stage) { std::fprintf(stderr, "diagnose: %s (%.0f s elapsed)\n", stage.c_str(), secondsSince(start)); };
-    const auto model = campaign::makeModel(study::parseStudy(study.dump(), study_file));
-    t = Clock::now();
-    const double c0 = cpuSeconds();
-    const campaign::Diagnosis d = campaign::diagnose(study, study_file, recordings, *model, settings);
-    const double wall_s = secondsSince(t), cpu_s = cpuSeconds() - c0;
-    fs::remove_all(dir);
-
-    std::printf("%-20s %10s %12s %14s %14s\n", "cause", "runs", "wall (s)", "before (%)", "after (%)");
-    nlohmann::json causes = nlohmann::json::array();
-    int runs = 0;
-    for (const auto& c : d.ranking) {
-      if (!c.fitted) continue;
-      runs += c.model_runs;
-      std::printf("%-20s %10d %12.2f %14.2f %14.2f\n", c.id.c_str(), c.model_runs, c.wall_time_s, c.error_before_percent, c.error_after_percent);
-      causes.push_back({{"id", c.id},
-                        {"model_runs", c.model_runs},
-                        {"wall_s", c.wall_time_s},
-                        {"error_before_percent", c.error_before_percent},
-                        {"error_after_percent", c.error_after_percent}});
-    }
-    std::printf("%-20s %10d %12.2f   (processor %.1f s, recordings %.1f s)\n", "whole diagnosis", runs, wall_s, cpu_s, recordings_s);
-    std::printf("named cause: %s\n", d.cause ? d.cause->c_str() : "no significant discrepancy");
-    cli::writeJson(json_target, {{"study", study_file},
-                                 {"clamp_true_Nm_per_rad", k_true},
-                                 {"jobs", jobs},
-                                 {"recordings_s", recordings_s},
-                                 {"diagnosis_wall_s", wall_s},
-                                 {"diagnosis_cpu_s", cpu_s},
-                                 {"cause", d.cause ? nlohmann::json(*d.cause) : nlohmann::json(nullptr)},
-                                 {"causes", causes}});
+    soil.jobs = jobs;
+    cli::writeJson(json_target, soil_bin ? soilBin(soil) : weightDrop(study_file, clamp_ei_l, jobs));
   });
   return cli::runApp(app, argc, argv);
 }

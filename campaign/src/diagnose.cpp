@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cmath>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -98,6 +99,66 @@ FoldOutcome crossValidate(const Extension& e, const std::string& id, const std::
   return out;
 }
 
+// The model's seed scatter of every soil-bin quantity of `recordings` (diagnose.hpp, step 5): the
+// study's runs at `seeds` deposition seeds (the first is the baseline's run, from the run cache),
+// per case and quantity the sample standard deviation of the seeds that ran.
+std::vector<SeedScatter> seedScatter(const ordered_json& study, const std::string& origin, const std::vector<analysis::Recording>& recordings,
+                                     Model& model, const CalibrationOptions& whole_stroke, int seeds) {
+  const std::vector<analysis::Recording> soil = ofKind(recordings, analysis::CaseKind::SoilBin);
+  if (soil.empty() || seeds < 2) return {};
+  CalibrationOptions options = whole_stroke;
+  options.model_seeds = seeds;
+  std::vector<analysis::Recording> runs;
+  predict(study, origin, soil, model, options, &runs);
+  std::map<std::pair<analysis::CaseKey, std::string>, std::vector<double>> values;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    std::vector<analysis::Recording> one;
+    for (const auto& r : runs)
+      if (r.repeat == seed) one.push_back(r);
+    for (const Quantity& q : quantities(one, options.objective, true)) values[{q.key, q.name}].push_back(q.value);
+  }
+  std::vector<SeedScatter> out;
+  for (const auto& [k, v] : values) {
+    if (v.size() < 2) continue;
+    double mean = 0, ss = 0;
+    for (double x : v) mean += x / static_cast<double>(v.size());
+    for (double x : v) ss += (x - mean) * (x - mean);
+    out.push_back({k.first, k.second, std::sqrt(ss / static_cast<double>(v.size() - 1)), static_cast<int>(v.size())});
+  }
+  return out;
+}
+
+const SeedScatter* scatterOf(const std::vector<SeedScatter>& scatter, const Residual& r) {
+  const auto it = std::find_if(scatter.begin(), scatter.end(), [&](const SeedScatter& s) { return s.key == r.key && s.quantity == r.quantity; });
+  return it == scatter.end() ? nullptr : &*it;
+}
+
+// A residual's sigma widened by the model's seed scatter of a mean over `model_seeds` runs,
+// sqrt(sigma^2 + s_model^2 / M) (diagnose.hpp, step 5): the scatter of a correct model's residual.
+double widenedSigma(const Residual& r, const std::vector<SeedScatter>& scatter, int model_seeds) {
+  const SeedScatter* s = scatterOf(scatter, r);
+  return std::sqrt(r.sigma * r.sigma + (s ? s->sd * s->sd / std::max(1, model_seeds) : 0.0));
+}
+
+double chi2WithScatter(const std::vector<Residual>& residuals, const std::vector<SeedScatter>& scatter, int model_seeds) {
+  double sum = 0;
+  for (const Residual& r : residuals) sum += std::pow((r.simulated - r.measured) / widenedSigma(r, scatter, model_seeds), 2);
+  return sum;
+}
+
+// The error a correct model shows from the scatter alone (diagnose.hpp, step 4): RMS over the
+// residuals of 100 widenedSigma / |measured|, percent.
+double noiseErrorPercent(const std::vector<Residual>& residuals, const std::vector<SeedScatter>& scatter, int model_seeds) {
+  double sum = 0;
+  int n = 0;
+  for (const Residual& r : residuals) {
+    if (r.measured == 0) continue;
+    sum += std::pow(100 * widenedSigma(r, scatter, model_seeds) / r.measured, 2);
+    ++n;
+  }
+  return n > 0 ? std::sqrt(sum / n) : 0.0;
+}
+
 std::string joined(const std::vector<std::string>& parts) {
   std::string s;
   for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
@@ -147,11 +208,16 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
   r.error_before_percent = errorPercent(before);
   const std::vector<Residual> after = comparable(r.held_out ? folds.held_out : all.residuals, base.failed_baseline_cases);
   r.error_after_percent = errorPercent(after);
-  r.gain_percent = r.error_before_percent > 0 ? 100 * (r.error_before_percent - r.error_after_percent) / r.error_before_percent : 0.0;
+  const int m = settings.calibration.model_seeds;
+  r.noise_error_percent = noiseErrorPercent(before, base.seed_scatter, m);
+  // An error below the noise's is not resolved: what an extension cuts beneath it is the packing of
+  // the seeds it ran, not the cause.
+  const double resolved_after = std::max(r.error_after_percent, r.noise_error_percent);
+  r.gain_percent = r.error_before_percent > 0 ? 100 * (r.error_before_percent - resolved_after) / r.error_before_percent : 0.0;
   const std::vector<Residual> fitted_all = comparable(all.residuals, base.failed_baseline_cases);
   const double n = static_cast<double>(fitted_all.size());
-  r.bic = chi2(fitted_all) + static_cast<double>(e.parameters.size()) * std::log(n);
-  r.delta_bic = r.bic - chi2(before_all);
+  r.bic = chi2WithScatter(fitted_all, base.seed_scatter, m) + static_cast<double>(e.parameters.size()) * std::log(n);
+  r.delta_bic = r.bic - chi2WithScatter(before_all, base.seed_scatter, m);
   r.wall_time_s = secondsSince(start);
   return r;
 }
@@ -234,6 +300,9 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   d.baseline_error_percent = errorPercent(ran);
   d.baseline_chi2 = chi2(ran);
   d.residual_count = static_cast<int>(d.baseline_residuals.size());
+  if (settings.on_stage && settings.scatter_seeds > 1) settings.on_stage("the model's seed scatter");
+  d.seed_scatter = seedScatter(study, origin, recordings, model, whole_stroke, settings.scatter_seeds);
+  d.noise_error_percent = noiseErrorPercent(ran, d.seed_scatter, settings.calibration.model_seeds);
   const analysis::ComparisonResult comparison = analysis::compare(recordings, d.baseline_runs, settings.calibration.objective.analysis);
   d.signatures = analysis::signaturesOf(comparison, settings.signatures);
   for (const Cause* c : causes) d.ranking.push_back(assess(*c, d, study, origin, recordings, model, settings));

@@ -57,6 +57,7 @@ const Section<CauseRow>& rankingSection() {
        {"split", [](const R& r) -> CellValue { return r.cause->split; }},
        {"error_before_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_before_percent); }},
        {"error_after_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_after_percent); }},
+       {"noise_error_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->noise_error_percent); }},
        {"gain_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->gain_percent); }},
        {"chi2", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->chi2); }},
        {"bic", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->bic); }},
@@ -152,6 +153,13 @@ nlohmann::json caseLabels(const std::vector<analysis::CaseKey>& cases) {
   return labels;
 }
 
+// Each soil quantity's spread over the baseline's deposition seeds (the model's own scatter).
+nlohmann::json seedScatterJson(const std::vector<SeedScatter>& scatter) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const SeedScatter& s : scatter) out.push_back({{"case", s.key.title()}, {"quantity", s.quantity}, {"sd", s.sd}, {"seeds", s.seeds}});
+  return out;
+}
+
 }  // namespace
 
 nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, const std::string& extended_study_path) {
@@ -168,11 +176,14 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
           {"baseline_error_percent", d.baseline_error_percent},
           {"baseline_chi2", d.baseline_chi2},
           {"failed_baseline_cases", caseLabels(d.failed_baseline_cases)},
+          {"seed_scatter", seedScatterJson(d.seed_scatter)},
+          {"noise_error_percent", d.noise_error_percent},
           {"residuals", d.residual_count},
           {"thresholds",
            {{"min_error_percent", settings.min_error_percent},
             {"min_gain_percent", settings.min_gain_percent},
-            {"min_delta_bic", settings.min_delta_bic}}},
+            {"min_delta_bic", settings.min_delta_bic},
+            {"scatter_seeds", settings.scatter_seeds}}},
           {"ranking", ranking},
           {"signatures", analysis::toJson(d.signatures)},
           {"extended_study", extended_study_path},
@@ -187,6 +198,10 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   if (d.cause) md += "Held-out error cut by the extension: " + shortNum(d.gain_percent) + " %. The extended study is `extended_study.json`.\n\n";
   md += "Baseline (the study as given) against all cases: error " + shortNum(d.baseline_error_percent) + " % (RMS of 100 (sim - meas) / meas " +
         "over every quantity of every case), chi2 " + shortNum(d.baseline_chi2) + " over " + std::to_string(d.residual_count) + " residuals.\n\n";
+  md += "Noise: a correct model would show an error of " + shortNum(d.noise_error_percent) + " % from the measured scatter" +
+        (d.seed_scatter.empty() ? std::string() : " and the model's own seed scatter (the baseline at " + std::to_string(settings.scatter_seeds) +
+                                                      " deposition seeds), which also widens the sigma of every BIC") +
+        "; an error below it is not counted as gain (docs/diagnosis.md).\n\n";
   if (!d.failed_baseline_cases.empty())
     md += "Left out of every error and BIC: the cases whose baseline run failed (DEM blow-up): " +
           caseLabels(d.failed_baseline_cases).dump() + ".\n\n";

@@ -2,9 +2,9 @@
 // and the benchmark (docs/calibration.md, "Soil against LIGGGHTS"; docs/diagnosis.md):
 //  1. `--preset layered-soil` of the two-layer built-in study on every recording, then the
 //     calibrated study's prediction of every depth;
-//  2. the single-layer built-in study fitted (the same preset: one stage) on the shallowest depth's
-//     recordings only, then its prediction of every depth;
-//  3. optionally `demfem diagnose` of the recordings with the single-layer study fitted in 2.
+//  2. optionally the single-layer built-in study fitted (the same preset: one stage) on the
+//     shallowest depth's recordings only, then its prediction of every depth;
+//  and `demfem diagnose` of the recordings with a single-layer study (diagnoseSingleLayer).
 // The built-in model records the draught of the rigid plate (campaign::SoilForce::Draught), like
 // the deck, and packs its soils from the deposition of the study each step starts from (shared
 // packing, campaign/model.hpp). Per depth: the LIGGGHTS seeds' window means (mean, sample standard deviation) against
@@ -34,16 +34,15 @@ struct SeedMean {
 struct DepthFigures {
   double depth_mm = 0;
   SeedMean liggghts;
-  SeedMean calibrated;    // two layers, --preset layered-soil
-  SeedMean single_layer;  // one layer fitted at the shallowest depth
+  SeedMean calibrated;                   // two layers, --preset layered-soil
+  std::optional<SeedMean> single_layer;  // one layer fitted at the shallowest depth (when fitted)
 };
 
 struct LayeredSoilOutcome {
   std::vector<DepthFigures> depths;  // ascending
-  StagedCalibration layered, single;
+  StagedCalibration layered;
+  std::optional<StagedCalibration> single;
   double layered_wall_s = 0, single_wall_s = 0;
-  std::optional<Diagnosis> diagnosis;
-  double diagnosis_wall_s = 0;
 };
 
 inline std::filesystem::path fixtureData(const std::string& name) {
@@ -124,7 +123,7 @@ inline Diagnosis diagnoseSingleLayer(const LayeredBin& bin, const std::vector<an
 }
 
 inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vector<analysis::Recording>& recordings,
-                                         const CalibrationOptions& options, const DiagnosisSettings* diagnosis) {
+                                         const CalibrationOptions& options, bool fit_single_layer) {
   LayeredSoilOutcome out;
   const auto modelOf = [](const nlohmann::ordered_json& study, const std::string& origin) {
     return SoilBinModel(SoilForce::Draught, study::parseStudy(study.dump(), origin));
@@ -143,22 +142,23 @@ inline LayeredSoilOutcome runLayeredSoil(const LayeredBin& bin, const std::vecto
   const auto calibrated = detail::predictSeeds(out.layered.calibrated_study, layered_file, recordings, layered_model, options, bin.seeds);
   out.layered_wall_s = detail::secondsSince(t);
 
-  const std::string single_file = fixtureData("single_layer_bin.json").string();
-  const auto single = singleLayerStudy(bin, std::nullopt);
-  std::vector<analysis::Recording> shallow;
-  for (const auto& r : recordings)
-    if (r.key.depth_mm == seeds.begin()->first) shallow.push_back(r);
-  SoilBinModel single_model = modelOf(single, single_file);
-  t = std::chrono::steady_clock::now();
-  out.single = calibrateStages(single, single_file, shallow, layeredSoilPreset(single, single_file, shallow), single_model, options);
-  const auto single_layer = detail::predictSeeds(out.single.calibrated_study, single_file, recordings, single_model, options, bin.seeds);
-  out.single_wall_s = detail::secondsSince(t);
-
-  for (const auto& [depth, values] : seeds) out.depths.push_back({depth, detail::seedMean(values), calibrated.at(depth), single_layer.at(depth)});
-  if (diagnosis) {
+  std::map<double, SeedMean> single_layer;
+  if (fit_single_layer) {
+    const std::string single_file = fixtureData("single_layer_bin.json").string();
+    const auto single = singleLayerStudy(bin, std::nullopt);
+    std::vector<analysis::Recording> shallow;
+    for (const auto& r : recordings)
+      if (r.key.depth_mm == seeds.begin()->first) shallow.push_back(r);
+    SoilBinModel single_model = modelOf(single, single_file);
     t = std::chrono::steady_clock::now();
-    out.diagnosis = diagnoseSingleLayer(bin, recordings, *diagnosis, out.single.calibrated_study);
-    out.diagnosis_wall_s = detail::secondsSince(t);
+    out.single = calibrateStages(single, single_file, shallow, layeredSoilPreset(single, single_file, shallow), single_model, options);
+    single_layer = detail::predictSeeds(out.single->calibrated_study, single_file, recordings, single_model, options, bin.seeds);
+    out.single_wall_s = detail::secondsSince(t);
+  }
+  for (const auto& [depth, values] : seeds) {
+    DepthFigures f{depth, detail::seedMean(values), calibrated.at(depth), std::nullopt};
+    if (fit_single_layer) f.single_layer = single_layer.at(depth);
+    out.depths.push_back(f);
   }
   return out;
 }

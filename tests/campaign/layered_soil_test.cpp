@@ -15,7 +15,7 @@ using namespace demfem;
 
 namespace {
 
-constexpr double kWindowBeginMm = 10;  // to the stroke's end, 40 mm (liggghts_layered_bin.hpp)
+constexpr double kWindowBeginMm = campaign::test::kCiBinWindowBeginMm;  // to the stroke's end, 40 mm
 
 // The soil test cases' shared caches in the build directory: settled soils ($DEMFEM_SOIL_DIR, set
 // here) and model runs (the returned run-cache directory; RunCache keys a run by study, deposition
@@ -64,8 +64,8 @@ void warnRanking(const campaign::Diagnosis& d) {
   CHECK(d.failed_baseline_cases.empty());
   for (const auto& c : d.ranking)
     if (c.fitted)
-      WARN(c.id << ": held-out error " << c.error_before_percent << " % -> " << c.error_after_percent << " % (" << c.split << "), delta BIC "
-                << c.delta_bic);
+      WARN(c.id << ": held-out error " << c.error_before_percent << " % -> " << c.error_after_percent << " % (noise " << c.noise_error_percent
+                << " %; " << c.split << "), gain " << c.gain_percent << " %, delta BIC " << c.delta_bic);
 }
 
 // The diagnosis' fits: one model seed each and 8 evaluations per fit, to fit CI's time (the
@@ -85,33 +85,34 @@ TEST_CASE("soil against LIGGGHTS: the layered-soil preset reproduces every depth
   // Every case at the three seeds LIGGGHTS ran: the model's seed scatter averages out like the
   // recordings'.
   const auto options = campaign::test::layeredSoilOptions(bin, kWindowBeginMm, 8, sharedSoilCache(), bin.seeds);
-  const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, nullptr);
+  const auto outcome = campaign::test::runLayeredSoil(bin, recordings, options, true);
 
   REQUIRE(outcome.depths.size() == 3);
+  for (const auto& d : outcome.depths) REQUIRE(d.single_layer);
   const auto& shallow = outcome.depths.front();
   const auto& deep = outcome.depths.back();
   for (const auto& d : outcome.depths)
     WARN(d.depth_mm << " mm, window mean of 3 seeds: LIGGGHTS " << d.liggghts.mean_N << " +- " << d.liggghts.sd_N
                     << " N, layered-soil preset " << d.calibrated.mean_N << " +- " << d.calibrated.sd_N << " N, one layer fitted at "
-                    << shallow.depth_mm << " mm " << d.single_layer.mean_N << " +- " << d.single_layer.sd_N << " N");
+                    << shallow.depth_mm << " mm " << d.single_layer->mean_N << " +- " << d.single_layer->sd_N << " N");
   // A failed prediction run has no draught: it is left out of the means (scored as 0 N it would pass
   // the under-prediction below for the wrong reason) and named; at least two seeds of every depth
   // ran (docs/calibration.md, "Not done yet": one such failure, not reproduced when rerun alone). The
   // model seed reaches the packing: the seeds' draughts differ.
   for (const auto& d : outcome.depths) {
-    if (d.calibrated.failed_runs + d.single_layer.failed_runs > 0)
-      WARN(d.depth_mm << " mm: failed runs, layered-soil preset " << d.calibrated.failed_runs << ", one layer " << d.single_layer.failed_runs);
+    if (d.calibrated.failed_runs + d.single_layer->failed_runs > 0)
+      WARN(d.depth_mm << " mm: failed runs, layered-soil preset " << d.calibrated.failed_runs << ", one layer " << d.single_layer->failed_runs);
     CHECK(bin.seeds - d.calibrated.failed_runs >= 2);
-    CHECK(bin.seeds - d.single_layer.failed_runs >= 2);
+    CHECK(bin.seeds - d.single_layer->failed_runs >= 2);
     CHECK(d.calibrated.sd_N > 0.01 * d.calibrated.mean_N);
   }
   REQUIRE(outcome.layered.stages.size() == 2);  // 20 mm: the top layer, 40 mm: the bottom layer; 55 mm adds none
   for (const auto& d : outcome.depths) CHECK(std::abs(d.calibrated.mean_N - d.liggghts.mean_N) <= twoStandardErrors(d.calibrated, d.liggghts));
   // One layer fitted at the shallowest depth matches it and under-predicts the deepest (the paper's
   // Section 2.10.2 finding: about 30 % low) by more than the seed scatter.
-  CHECK(std::abs(shallow.single_layer.mean_N - shallow.liggghts.mean_N) <= twoStandardErrors(shallow.single_layer, shallow.liggghts));
-  CHECK(deep.single_layer.mean_N < 0.85 * deep.liggghts.mean_N);
-  CHECK(deep.liggghts.mean_N - deep.single_layer.mean_N > twoStandardErrors(deep.single_layer, deep.liggghts));
+  CHECK(std::abs(shallow.single_layer->mean_N - shallow.liggghts.mean_N) <= twoStandardErrors(*shallow.single_layer, shallow.liggghts));
+  CHECK(deep.single_layer->mean_N < 0.85 * deep.liggghts.mean_N);
+  CHECK(deep.liggghts.mean_N - deep.single_layer->mean_N > twoStandardErrors(*deep.single_layer, deep.liggghts));
 }
 
 TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-layer study names layered_soil",
@@ -130,18 +131,21 @@ TEST_CASE("soil against LIGGGHTS: diagnose of the two-layer bin with a single-la
   CHECK(d.gain_percent >= 50);
 }
 
-// Hidden (not run by ctest): at one model seed it named end_wall (held-out error 24.7 % -> 9.4 %,
-// gain 62 %) where an earlier run found no significant discrepancy (17.6 %): one model seed is one
-// packing shared by every depth, whose deviation from the recordings' three-seed means a fold's fit
-// carries over to the held-out depth. The recordings' three seeds would triple its cost beyond CI's
-// (docs/diagnosis.md, soil). Run it with `campaign_soil_tests "[uniform-diagnosis]"`.
+// Hidden (not run by ctest, to keep CI's time: about 400 s of processor time with its own LIGGGHTS
+// fixture). At one model seed a fold's fit carries the packing shared by every depth over to the
+// held-out depth: end_wall cut the held-out error 24.7 % -> 11.5 %, below the 17.5 % a correct model
+// shows from the measured and the model's own seed scatter (diagnose.hpp, steps 4 and 5), so the
+// gain above that noise is 29 % (docs/diagnosis.md, soil). Run it with
+// `campaign_soil_tests "[uniform-diagnosis]"`.
 TEST_CASE("soil against LIGGGHTS: diagnose of a single-layer bin with the same single-layer study finds no significant discrepancy",
           "[campaign][physics][.][uniform-diagnosis]") {
   campaign::test::LayeredBin bin;
   bin.uniform_friction = 0.5;  // the single-layer study's friction (tests/campaign/data/single_layer_bin.json)
   const auto d = campaign::test::diagnoseSingleLayer(bin, liggghtsRecordings(bin), diagnosisSettings(bin),
                                                      campaign::test::singleLayerStudy(bin, std::nullopt));
-  WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent << " %");
+  WARN("diagnosis: " << (d.cause ? *d.cause : "none") << ", " << d.reason << "; baseline error " << d.baseline_error_percent
+                     << " %, noise error " << d.noise_error_percent << " %");
   warnRanking(d);
+  CHECK(d.seed_scatter.size() == 6);  // window mean and spread at three depths
   CHECK_FALSE(d.cause);
 }

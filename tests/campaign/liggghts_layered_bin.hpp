@@ -47,6 +47,16 @@ struct LayeredBin {
   std::optional<double> uniform_friction;
 };
 
+// The small bin of the cost benchmarks (docs/calibration.md, "Cost of a soil calibration"): the CI
+// bin 330 mm long (about 2,570 particles) with a 200 mm stroke; statistics window from 50 mm.
+inline LayeredBin smallBin() {
+  LayeredBin bin;
+  bin.length_m = 0.33, bin.stroke_m = 0.2;
+  return bin;
+}
+constexpr double kSmallBinWindowBeginMm = 50;
+constexpr double kCiBinWindowBeginMm = 10;  // the CI bin's window: 10 mm to the stroke's end
+
 // The built-in study of `bin` from one of the fixture studies (tests/campaign/data/layered_bin.json,
 // single_layer_bin.json): bin, fill, tool plan and the layers' depths set from `bin` (the layers
 // keep their materials; two layers are split at the interface, one spans the fill).

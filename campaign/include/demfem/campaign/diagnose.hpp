@@ -17,15 +17,24 @@
 //     force and deformation, frequency, damping ratio; window means and spreads) of the relative
 //     difference 100 (sim - meas) / meas, in percent; a set of cases: the RMS over all their
 //     quantities. Held-out error before = the baseline's on the held-out cases, after = the
-//     extended model's from the folds.
+//     extended model's from the folds. Noise error: the error a correct model shows from the
+//     scatter alone, the RMS over the same quantities of 100 sigma_w / |measured| with sigma_w the
+//     widened sigma of step 5; an error after below it is not resolved, so the gain is
+//     100 (before - max(after, noise)) / before.
 //  5. Information criterion: BIC = chi2 + k ln n with chi2 of the fit on all cases (objective.hpp:
 //     residuals normalised by the measured scatter, so chi2 is -2 ln L up to a constant), k the
 //     extension's parameters, n the residuals; delta_bic = BIC - chi2 of the baseline (k = 0).
+//     Soil-bin cases: a DEM run is one random packing, so the model has a seed scatter of its own.
+//     The baseline also runs at settings.scatter_seeds deposition seeds (the study's and the next
+//     ones); per case and quantity their standard deviation s_model (seed_scatter) widens the
+//     residuals' sigma of the BIC to sqrt(sigma^2 + s_model^2 / M), M the fits' model seeds
+//     (calibration.model_seeds): a fit that only absorbs the packing of the seeds it runs earns no
+//     evidence.
 //  6. Ranking: by held-out error after (ascending; in-sample for causes ranked on all cases), ties by
 //     delta_bic. The first cause is named when all hold: the baseline error on all cases is at least
 //     min_error_percent (below it the model already agrees with the recordings as well as two
 //     independent correct models of the tool agree with each other, docs/diagnosis.md), its gain
-//     100 (before - after) / before is at least min_gain_percent, and delta_bic <= -min_delta_bic.
+//     (step 4) is at least min_gain_percent, and delta_bic <= -min_delta_bic.
 //     Otherwise the verdict is "no significant discrepancy" with the reason.
 // - Every model run goes through the calibration's run cache (options.cache_dir).
 // - Throws ArgumentError for unusable input (no candidate cause, a named cause unknown, a case the
@@ -66,6 +75,7 @@ struct DiagnosisSettings {
   double min_error_percent = 5.0;
   double min_gain_percent = 50.0;
   double min_delta_bic = 10.0;
+  int scatter_seeds = 3;  // soil-bin cases: deposition seeds of the baseline's seed scatter (1: none)
   std::function<void(const std::string&)> on_stage;  // "fitting clamp_compliance, fold 2/2", for progress
 };
 
@@ -81,13 +91,24 @@ struct CauseResult {
   std::string split;                         // how the error after was obtained
   double error_before_percent = 0.0;         // held-out cases (or all cases), baseline
   double error_after_percent = 0.0;          // the same cases, extended model
-  double gain_percent = 0.0;
+  double noise_error_percent = 0.0;          // the same cases, a correct model's error from the scatter alone (step 4)
+  double gain_percent = 0.0;                 // 100 (before - max(after, noise)) / before
   double chi2 = 0.0, bic = 0.0, delta_bic = 0.0;
   int model_runs = 0;
   double wall_time_s = 0.0;
   nlohmann::ordered_json extended_study;     // fitted on all cases
   std::vector<Residual> residuals;           // of the fit on all cases
   std::vector<analysis::Recording> runs;     // the extended model's runs (fit on all cases)
+};
+
+// The model's own seed scatter of one quantity of one case (step 5 of the header comment): the
+// sample standard deviation of the baseline's value over `seeds` deposition seeds, in the quantity's
+// unit.
+struct SeedScatter {
+  analysis::CaseKey key;
+  std::string quantity;
+  double sd = 0.0;
+  int seeds = 0;
 };
 
 struct Diagnosis {
@@ -97,7 +118,9 @@ struct Diagnosis {
   std::vector<analysis::Recording> measured;
   double baseline_error_percent = 0.0;      // all cases whose baseline runs ran
   std::vector<analysis::CaseKey> failed_baseline_cases;  // a baseline run failed: left out of every error and BIC
-  double baseline_chi2 = 0.0;
+  double baseline_chi2 = 0.0;               // residuals normalised by the measured scatter only
+  std::vector<SeedScatter> seed_scatter;     // soil-bin quantities (empty without soil cases or scatter_seeds < 2)
+  double noise_error_percent = 0.0;          // all cases whose baseline ran: a correct model's error from the scatter alone (step 4)
   int residual_count = 0;
   std::vector<CauseResult> ranking;         // fitted causes ranked first, then the others
   std::optional<std::string> cause;         // the named cause
