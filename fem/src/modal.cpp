@@ -70,6 +70,13 @@ Modes resolvedModes(const ReducedModel& model, double dt_s, double max_omega_dt)
   }
 }
 
+// out += a0 w0 + a1 w1 + a2 w2 + a3 w3 over `rows` entries, summed left to right (as Eigen's
+// expression would); compiled for AVX2 too, chosen at run time.
+[[gnu::target_clones("avx2", "default")]] void addFour(double* __restrict out, const double* a0, const double* a1, const double* a2,
+                                                       const double* a3, const double (&w)[4], Eigen::Index rows) {
+  for (Eigen::Index i = 0; i < rows; ++i) out[i] += a0[i] * w[0] + a1[i] * w[1] + a2[i] * w[2] + a3[i] * w[3];
+}
+
 // out = sum_k A.col(columns[k]) * weights(k): the product of A's columns at the loaded DOFs with
 // their forces, four columns per pass over `out` (no gathered copy of the columns).
 void addColumns(const Eigen::MatrixXd& A, const std::vector<Eigen::Index>& columns, const Eigen::VectorXd& weights,
@@ -79,8 +86,9 @@ void addColumns(const Eigen::MatrixXd& A, const std::vector<Eigen::Index>& colum
   std::size_t k = 0;
   for (; k + 4 <= n; k += 4) {
     const auto w = [&](std::size_t j) { return weights(static_cast<Eigen::Index>(j)); };
-    out.noalias() += A.col(columns[k]) * w(k) + A.col(columns[k + 1]) * w(k + 1) + A.col(columns[k + 2]) * w(k + 2) +
-                     A.col(columns[k + 3]) * w(k + 3);
+    const double four[4] = {w(k), w(k + 1), w(k + 2), w(k + 3)};
+    addFour(out.data(), A.col(columns[k]).data(), A.col(columns[k + 1]).data(), A.col(columns[k + 2]).data(),
+            A.col(columns[k + 3]).data(), four, A.rows());
   }
   for (; k < n; ++k) out.noalias() += A.col(columns[k]) * weights(static_cast<Eigen::Index>(k));
 }
