@@ -131,9 +131,7 @@ int main(int argc, char** argv) {
   app.add_option("--idle-timeout-s", o.idle_timeout_s,
                  "Give up if the client sends nothing for this long (s); default: twice the study's coupling timeout")
       ->check(CLI::PositiveNumber);
-  app.add_flag("--allow-unsettled-soil", o.allow_unsettled_soil,
-               "Serve even if the settled soil is not settled (a deposition stage hit its time cap or the kinetic "
-               "energy is above the study's threshold); refused by default");
+  cli::addAllowUnsettledSoilFlag(app, o.allow_unsettled_soil);
   app.add_option("--test-force-N", o.load.force_N, "Test backends: total tip-row force F along local z (N)");
   app.add_option("--test-frequency-Hz", o.load.frequency_Hz, "Harmonic test backend: frequency f (Hz)");
   app.add_option("--test-stiffness-N-m", o.load.stiffness_N_m, "Spring test backend: total tip-row stiffness k (N/m)");

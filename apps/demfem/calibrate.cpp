@@ -42,7 +42,7 @@ void run(CalibrateOptions& o, const std::string& json_target) {
                   p.start, p.starts, p.best_chi2);
     progress.update(p.max_evaluations > 0 ? static_cast<double>(p.evaluation) / p.max_evaluations : 0.0, detail);
   };
-  const auto model = campaign::makeModel(in.study, o.fit.soil.force, o.fit.soil.shared_packing);
+  const auto model = campaign::makeModel(in.study, o.fit.soil.force, o.fit.soil.shared_packing, o.fit.soil.allow_unsettled_soil);
   const auto result = campaign::calibrateStages(in.study_json, o.fit.study_file, in.recordings, stages, *model, c);
   progress.finish();
 

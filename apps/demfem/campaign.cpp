@@ -16,6 +16,7 @@
 #include <fstream>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 
 namespace demfem::cli {
@@ -103,10 +104,11 @@ void run(CampaignOptions& o, const std::string& json_target) {
   o.run.estimate_wall_s = estimateWallSeconds;
   auto lines = std::make_shared<ProgressLines>(!o.quiet);
   o.run.on_progress = [lines](const campaign::CampaignProgress& p) { (*lines)(p); };
-  auto deposition = std::make_shared<std::unique_ptr<Progress>>();
-  o.run.on_deposit = [deposition, quiet = o.quiet](const std::string& name, double fraction) {
-    if (!*deposition) *deposition = std::make_unique<Progress>("deposition of the soil of " + name, !quiet);
-    (*deposition)->update(fraction);
+  auto deposition = std::make_shared<std::map<std::string, Progress>>();
+  o.run.on_deposit = [deposition, quiet = o.quiet](const std::string& name, double fraction, const std::string& stage_line) {
+    auto& progress = deposition->try_emplace(name, "deposition of the soil of " + name, !quiet).first->second;
+    if (!stage_line.empty() && !quiet) std::cerr << "deposition of the soil of " << name << ": " << stage_line << std::endl;
+    progress.update(fraction);
   };
   std::signal(SIGINT, onCampaignStop);
   std::signal(SIGTERM, onCampaignStop);
@@ -140,6 +142,7 @@ void addCampaignCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--label", o->label, "Text the report names its runs by (e.g. the source revision they came from)");
   addPlotOptions(*cmd, o->no_plots, o->gnuplot, "report's SVG plots");
+  addAllowUnsettledSoilFlag(*cmd, o->run.allow_unsettled_soil);
   cmd->add_flag("--quiet", o->quiet, "No progress on stderr");
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([o, &json_target] {

@@ -143,7 +143,7 @@ void addCptOptions(CLI::App& cmd, CptOptions& o) {
                  "and non-layered assemblies")
       ->check(CLI::ExistingFile);
   cmd.add_option("--threads", o.threads, "OpenMP threads of the built-in DEM (default: the study's dem.threads)")->check(CLI::PositiveNumber);
-  cmd.add_flag("--allow-unsettled-soil", o.allow_unsettled_soil, "Run even if the settled soil is not settled");
+  addAllowUnsettledSoilFlag(cmd, o.allow_unsettled_soil);
   addPlotOptions(cmd, o.no_plots, o.gnuplot, "SVG and PNG plots");
   cmd.add_flag("--quiet", o.quiet, "No progress output");
 }

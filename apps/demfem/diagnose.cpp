@@ -26,7 +26,7 @@ void run(DiagnoseOptions& o, const std::string& json_target) {
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::fprintf(stderr, "diagnose: %s (%.0f s elapsed)\n", stage.c_str(), elapsed);
     };
-  const auto model = campaign::makeModel(in.study, o.fit.soil.force, o.fit.soil.shared_packing);
+  const auto model = campaign::makeModel(in.study, o.fit.soil.force, o.fit.soil.shared_packing, o.fit.soil.allow_unsettled_soil);
   const campaign::Diagnosis d = campaign::diagnose(in.study_json, o.fit.study_file, in.recordings, *model, o.settings);
 
   const auto dir = writeStaged(o.fit.analysis, [&](analysis::StagedOutput& out, const analysis::GnuplotRenderer* renderer) {

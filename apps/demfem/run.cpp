@@ -293,8 +293,7 @@ void addRunCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--resume", o->resume, "Resume from the checkpoint in the output directory");
   cmd->add_flag("--quiet", o->quiet, "No progress output");
-  cmd->add_flag("--allow-unsettled-soil", o->allow_unsettled_soil,
-                "Run even if the settled soil is not settled (refused by default; the soil's figures are in sensors.json)");
+  addAllowUnsettledSoilFlag(*cmd, o->allow_unsettled_soil);
   std::string& json = addJsonOption(*cmd);
   cmd->callback([o, &json] { runLocal(*o, json); });
 }

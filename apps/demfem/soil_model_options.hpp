@@ -20,6 +20,7 @@ struct SoilModelOptions {
   bool shared_packing = true;
   bool full_stroke = false;
   int model_seeds = 1;
+  bool allow_unsettled_soil = false;
 };
 
 inline void addSoilModelOptions(CLI::App& cmd, SoilModelOptions& o) {
@@ -42,6 +43,7 @@ inline void addSoilModelOptions(CLI::App& cmd, SoilModelOptions& o) {
       ->capture_default_str();
   cmd.add_flag("--full-stroke", o.full_stroke,
                "Run every soil-bin case over the study's whole stroke (default: the stroke ends with the statistics window)");
+  addAllowUnsettledSoilFlag(cmd, o.allow_unsettled_soil);
 }
 
 // With a shared packing the soil files hold relabelled packings: they live in the run cache

@@ -122,13 +122,21 @@ void SoilBinModel::prepare(const std::vector<study::Study>& case_studies) {
 }
 
 void SoilBinModel::prepareSoil(const study::Study& s) const {
-  const auto dir = adapter::defaultSoilDirectory();
-  const auto file = adapter::settledSoilFile(s, dir);
-  if (std::filesystem::exists(file)) return;
-  if (!packing_) {
-    builtin::makeBackend(s);  // deposits the soil and writes its file (backend.hpp)
-    return;
+  const auto file = adapter::settledSoilFile(s, adapter::defaultSoilDirectory());
+  if (!std::filesystem::exists(file)) {
+    if (packing_)
+      relabelPacking(s, file);
+    else
+      builtin::makeBackend(s);  // deposits the soil and writes its file (backend.hpp)
   }
+  const std::string reason = adapter::unsettledReason(adapter::readSettledSoil(file, s).settling);
+  if (!reason.empty() && !allow_unsettled_soil_)
+    throw ArgumentError("study '" + s.name + "': its soil " + file.string() + " is not settled: " + reason +
+                        ". Raise soil.deposition.settle_kinetic_energy_J, or run on it anyway with --allow-unsettled-soil");
+}
+
+void SoilBinModel::relabelPacking(const study::Study& s, const std::filesystem::path& file) const {
+  const auto dir = adapter::defaultSoilDirectory();
   study::Study reference = *packing_;
   reference.soil.deposition_seed = s.soil.deposition_seed;
   const auto& a = reference.soil;
@@ -145,13 +153,13 @@ void SoilBinModel::prepareSoil(const study::Study& s) const {
   adapter::writeSettledSoil(file, soil);
 }
 
-std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force, bool shared_packing) {
+std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force, bool shared_packing, bool allow_unsettled_soil) {
   switch (study.kind) {
     case study::StudyKind::WeightDrop:
       return std::make_unique<WeightDropModel>();
     case study::StudyKind::Coupled:
     case study::StudyKind::DemOnly:
-      return std::make_unique<SoilBinModel>(soil_force, shared_packing ? std::optional(study) : std::nullopt);
+      return std::make_unique<SoilBinModel>(soil_force, shared_packing ? std::optional(study) : std::nullopt, allow_unsettled_soil);
     case study::StudyKind::ConePenetration:
     case study::StudyKind::FemOnly:
       break;

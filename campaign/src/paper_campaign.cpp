@@ -106,10 +106,16 @@ void depositSoils(const std::vector<Case>& cases, const CampaignOptions& o) {
   std::set<std::string> done;
   for (const Case& c : cases) {
     if (c.status.state == CaseState::Done || !done.insert(study::soilHash(c.study)).second) continue;
-    if (!fs::exists(adapter::settledSoilFile(c.study, adapter::defaultSoilDirectory())))
-      builtin::makeBackend(c.study, [&](double fraction, const std::string&) {  // deposits and writes it (builtin/backend.hpp)
-        if (o.on_deposit) o.on_deposit(c.status.name, fraction);
+    const fs::path file = adapter::settledSoilFile(c.study, adapter::defaultSoilDirectory());
+    if (!fs::exists(file))
+      builtin::makeBackend(c.study, [&](double fraction, const std::string& stage_line) {  // deposits and writes it (builtin/backend.hpp)
+        if (o.on_deposit) o.on_deposit(c.status.name, fraction, stage_line);
       });
+    const std::string reason = adapter::unsettledReason(adapter::readSettledSoil(file, c.study).settling);
+    if (!reason.empty() && !o.allow_unsettled_soil)
+      throw ArgumentError("case " + c.status.name + ": its soil " + file.string() + " is not settled: " + reason +
+                          "; no case was run. Raise soil.deposition.settle_kinetic_energy_J and remove that file to deposit "
+                          "it again, or run on it anyway with --allow-unsettled-soil");
   }
 }
 

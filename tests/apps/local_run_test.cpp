@@ -137,7 +137,7 @@ TEST_CASE("SIGKILL on demfem run takes both children down, and the next run remo
   fs::remove_all(dir);
 }
 
-TEST_CASE("an unsettled soil stops demfem run and demfem-dem unless allowed, and its figures go into sensors.json",
+TEST_CASE("an unsettled soil stops demfem run, demfem-dem and demfem campaign unless allowed, and its figures go into sensors.json",
           "[apps][soil]") {
   const fs::path dir = freshDir("unsettled-soil");
   const fs::path study_file = fastQuickStudy(dir);
@@ -187,5 +187,24 @@ TEST_CASE("an unsettled soil stops demfem run and demfem-dem unless allowed, and
   CHECK(record.at("file") == soil_file.string());
   CHECK(record.at("file_checksum") == demfem::adapter::settledSoilChecksum(soil_file));
   CHECK(record.at("deposition_backend") == "builtin");
+
+  // The campaign checks every case's soil before it runs any; allowed, it records the soil the same way.
+  const auto campaign = [&](const std::string& tag, bool allow) {
+    std::vector<std::string> args{app("demfem"), "campaign", study_file.string(), "--dir", (dir / tag).string(), "--steps", "5", "--quiet"};
+    if (allow) args.push_back("--allow-unsettled-soil");
+    return Process(args, dir / (tag + "-campaign"));
+  };
+  Process campaign_refused = campaign("campaign-refused", false);
+  const int refused_status = campaign_refused.wait(120s);
+  CHECK((WIFEXITED(refused_status) && WEXITSTATUS(refused_status) != 0));
+  CHECK_THAT(campaign_refused.err(), Catch::Contains("case quick_fast") && Catch::Contains(soil_file.string()) &&
+                                         Catch::Contains("final settling phase hit its time cap") &&
+                                         Catch::Contains("--allow-unsettled-soil"));
+  CHECK_FALSE(fs::exists(dir / "campaign-refused" / "quick_fast" / "sensors.json"));
+  Process campaign_allowed = campaign("campaign-allowed", true);
+  const int allowed_status = campaign_allowed.wait(240s);
+  INFO(campaign_allowed.err());
+  REQUIRE(exitedOk(allowed_status));
+  CHECK(nlohmann::json::parse(readText(dir / "campaign-allowed" / "quick_fast" / "sensors.json")).at("soil").at("settled") == false);
   fs::remove_all(dir);
 }

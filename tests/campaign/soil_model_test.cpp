@@ -3,9 +3,14 @@
 #include "weight_drop_fixture.hpp"
 
 #include "demfem/analysis/synthetic.hpp"
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/campaign/calibration.hpp"
+#include "demfem/campaign/model.hpp"
+#include "demfem/study/study.hpp"
 
 #include <catch2/catch.hpp>
+
+#include <cstdlib>
 
 using namespace demfem;
 
@@ -38,4 +43,29 @@ TEST_CASE("a soil-bin recording runs the study at the recording's depth and is s
   const auto again = campaign::predict(study, study_file.string(), recordings, model, options);
   CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count() < 2.0);
   CHECK(again[0].simulated == residuals[0].simulated);
+}
+
+TEST_CASE("the soil-bin model refuses an unsettled soil, naming the study, the file and the reason, unless allowed", "[campaign]") {
+  const campaign::test::TempDir dir("unsettled");
+  const char* previous = std::getenv("DEMFEM_SOIL_DIR");
+  const std::string restore = previous ? previous : "";
+  ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
+  const auto study = study::loadStudy(std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data/tiny_bin.json");
+  // A soil whose last settling phase hit its time cap: a few grains on the floor.
+  adapter::SettledSoil soil;
+  soil.soil_hash = study::soilHash(study);
+  soil.seed = study.soil.deposition_seed;
+  soil.settling = {2.5e-6, study.soil.settle_kinetic_energy_J, 5, 1, true, 7.5, 0.0, 0.0};
+  for (int i = 0; i < 4; ++i)
+    soil.particles.push_back({{0.02 + 0.012 * i, study.soil.diameter_max_m / 2, 0.02}, study.soil.diameter_max_m / 2, 0});
+  const auto file = adapter::settledSoilFile(study, dir.path() / "soil");
+  adapter::writeSettledSoil(file, soil);
+  CHECK_THROWS_WITH(campaign::SoilBinModel().prepare({study}),
+                    Catch::Contains("study '" + study.name + "'") && Catch::Contains(file.string()) &&
+                        Catch::Contains("final settling phase hit its time cap") && Catch::Contains("--allow-unsettled-soil"));
+  CHECK_NOTHROW(campaign::SoilBinModel(campaign::SoilForce::LoadCell, std::nullopt, true).prepare({study}));
+  if (previous)
+    ::setenv("DEMFEM_SOIL_DIR", restore.c_str(), 1);
+  else
+    ::unsetenv("DEMFEM_SOIL_DIR");
 }

@@ -49,6 +49,12 @@ void addPlotOptions(CLI::App& cmd, bool& no_plots, std::string& gnuplot, const s
   cmd.add_option("--gnuplot", gnuplot, "gnuplot executable of the " + plots)->capture_default_str();
 }
 
+void addAllowUnsettledSoilFlag(CLI::App& cmd, bool& allow) {
+  cmd.add_flag("--allow-unsettled-soil", allow,
+               "Run even if the settled soil is not settled (a settling stage hit its time cap or the kinetic energy is "
+               "above the study's threshold); refused by default, the soil's figures are recorded with the run");
+}
+
 void writeJson(const std::string& target, const nlohmann::json& doc) {
   if (target.empty()) return;
   if (target == "-") {

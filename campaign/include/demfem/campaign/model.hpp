@@ -41,6 +41,8 @@
 //     numbers: the objective's noise between neighbouring values is the drag's, not another
 //     packing's). The packing study's soil hash is part of name(). Bin, fill height and particle
 //     sizes must be the packing study's (ArgumentError otherwise).
+//   A soil that is not settled (adapter::unsettledReason) is an ArgumentError naming the study, the
+//   file and the reason, unless `allow_unsettled_soil`.
 #pragma once
 
 #include "demfem/analysis/recording.hpp"
@@ -98,8 +100,9 @@ enum class SoilForce { LoadCell, Draught };
 
 class SoilBinModel final : public Model {
  public:
-  explicit SoilBinModel(SoilForce force = SoilForce::LoadCell, std::optional<study::Study> packing = std::nullopt)
-      : force_(force), packing_(std::move(packing)) {}
+  explicit SoilBinModel(SoilForce force = SoilForce::LoadCell, std::optional<study::Study> packing = std::nullopt,
+                        bool allow_unsettled_soil = false)
+      : force_(force), packing_(std::move(packing)), allow_unsettled_soil_(allow_unsettled_soil) {}
   // Throws ArgumentError for SoilForce::Draught with a deformable tool.
   analysis::Recording run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) override;
   std::string name() const override;
@@ -107,13 +110,17 @@ class SoilBinModel final : public Model {
 
  private:
   void prepareSoil(const study::Study& study) const;
+  // Writes `file`: the packing study's deposition at the study's seed, relabelled (see contract).
+  void relabelPacking(const study::Study& study, const std::filesystem::path& file) const;
   SoilForce force_;
   std::optional<study::Study> packing_;
+  bool allow_unsettled_soil_ = false;
 };
 
 // The model for the study's kind: weight-drop -> WeightDropModel, coupled / dem-only ->
-// SoilBinModel with `soil_force`, its packing shared from `study` when `shared_packing`. Throws
-// ArgumentError for other kinds.
-std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force = SoilForce::LoadCell, bool shared_packing = false);
+// SoilBinModel with `soil_force`, its packing shared from `study` when `shared_packing`, refusing an
+// unsettled soil unless `allow_unsettled_soil`. Throws ArgumentError for other kinds.
+std::unique_ptr<Model> makeModel(const study::Study& study, SoilForce soil_force = SoilForce::LoadCell, bool shared_packing = false,
+                                 bool allow_unsettled_soil = false);
 
 }  // namespace demfem::campaign

@@ -16,7 +16,9 @@
 //   shortened run, e.g. CI) marks the case incomplete, so a later call without it continues it.
 // - Soil: every case's settled soil (adapter/settled_soil.hpp) is deposited before any case runs,
 //   one deposition per soil hash, in adapter::defaultSoilDirectory() (cases that differ only in
-//   depth, velocity or tool share it).
+//   depth, velocity or tool share it). A soil that is not settled (adapter::unsettledReason) is an
+//   ArgumentError naming the case, the file and the reason before any case runs, unless
+//   `allow_unsettled_soil` (the run then records settled: false in its sensors.json).
 // - Concurrency: `jobs` cases at once, each with `threads` built-in DEM threads (0: the study's
 //   dem.threads divided by jobs, at least 1); cases start in the given order.
 // - Estimates: estimate_wall_s (the caller's estimate from measured speeds, `demfem validate`'s)
@@ -74,7 +76,10 @@ struct CampaignOptions {
   std::optional<std::int64_t> max_steps;
   std::function<double(const study::Study&)> estimate_wall_s;  // may be empty: no estimates (0)
   std::function<void(const CampaignProgress&)> on_progress;     // every 0.2 s, from the calling thread
-  std::function<void(const std::string& case_name, double fraction)> on_deposit;  // a soil's deposition
+  // A soil's deposition: the fraction done and, at the end of each settling stage, its summary line
+  // (empty otherwise; builtin::DepositProgress).
+  std::function<void(const std::string& case_name, double fraction, const std::string& stage_line)> on_deposit;
+  bool allow_unsettled_soil = false;
   std::function<bool()> stop_requested;
 };
 

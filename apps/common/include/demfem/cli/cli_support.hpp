@@ -42,6 +42,10 @@ std::string& addJsonOption(CLI::App& cmd);
 // draws `plots` (their description, e.g. "SVG and PNG plots").
 void addPlotOptions(CLI::App& cmd, bool& no_plots, std::string& gnuplot, const std::string& plots);
 
+// Adds `--allow-unsettled-soil` (sets `allow`): run even on a soil whose deposition did not settle
+// (refused by default: adapter::unsettledReason; the soil's figures are recorded with the run).
+void addAllowUnsettledSoilFlag(CLI::App& cmd, bool& allow);
+
 // False when `--json -` claimed standard output: then the command prints nothing else there.
 inline bool textOnStdout(const std::string& json_target) { return json_target != "-"; }
 
