@@ -1,7 +1,7 @@
 // Share of the FEM client in a coupled run (fem/coupled_driver.hpp) on a study's bin with the built-in
 // DEM in-process: the time spent inside the DEM's coupling calls against the rest (FEM step,
-// sensors, outputs), for the full and the modal integration (study fem.integration), in interleaved
-// rounds (full, modal, full, modal, ...) on the same settled soil. Wall and processor time of the
+// sensors, outputs), for the full and the modal integration (study fem.integration; --integrations
+// picks them), in interleaved rounds (full, modal, full, modal, ...) on the same settled soil. Wall and processor time of the
 // calling thread; the DEM runs on the study's dem.threads. Prints a table; --json writes the same.
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
@@ -117,25 +117,27 @@ int main(int argc, char** argv) {
   int rounds = 1;
   std::int64_t steps = 0;
   app.add_option("--study", study_file, "coupled study")->check(CLI::ExistingFile)->capture_default_str();
-  app.add_option("--rounds", rounds, "interleaved rounds (full, modal)")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--rounds", rounds, "interleaved rounds (one run of each --integrations value)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--steps", steps, "FEM steps per run (0: the whole plan)")->check(CLI::NonNegativeNumber);
+  std::vector<std::string> kinds{"full", "modal"};
+  app.add_option("--integrations", kinds, "study fem.integration values timed in each round, in this order")
+      ->check(CLI::IsMember({"full", "modal"}))
+      ->capture_default_str();
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
     const fs::path scratch = fs::temp_directory_path() / ("demfem-bench-coupled-" + std::to_string(getpid()));
     const std::optional<std::int64_t> max_steps = steps > 0 ? std::optional<std::int64_t>(steps) : std::nullopt;
-    const std::vector<std::string> kinds{"full", "modal"};
-    std::vector<RunCost> costs[2];
+    std::vector<std::vector<RunCost>> costs(kinds.size());
     for (int r = 0; r < rounds; ++r)
-      for (int k = 0; k < 2; ++k) {
-        std::fprintf(stderr, "round %d of %d: %s integration\n", r + 1, rounds, kinds[static_cast<std::size_t>(k)].c_str());
-        costs[k].push_back(coupledRun(withIntegration(study_file, kinds[static_cast<std::size_t>(k)]), scratch / kinds[static_cast<std::size_t>(k)],
-                                      max_steps));
+      for (std::size_t k = 0; k < kinds.size(); ++k) {
+        std::fprintf(stderr, "round %d of %d: %s integration\n", r + 1, rounds, kinds[k].c_str());
+        costs[k].push_back(coupledRun(withIntegration(study_file, kinds[k]), scratch / kinds[k], max_steps));
       }
     fs::remove_all(scratch);
     nlohmann::json rows = nlohmann::json::array();
     std::printf("%-8s %8s %14s %14s %14s %14s %14s\n", "FEM", "steps", "set-up (s)", "DEM/step (ms)", "FEM/step (ms)", "FEM wall (%)",
                 "FEM cpu (%)");
-    for (int k = 0; k < 2; ++k) {
+    for (std::size_t k = 0; k < kinds.size(); ++k) {
       std::vector<double> setup, dem_ms, fem_ms, wall_share, cpu_share;
       for (const RunCost& c : costs[k]) {
         const auto n = static_cast<double>(c.steps);
@@ -145,7 +147,7 @@ int main(int argc, char** argv) {
         wall_share.push_back(100 * c.femWallShare());
         cpu_share.push_back(100 * c.femCpuShare());
       }
-      const auto& name = kinds[static_cast<std::size_t>(k)];
+      const auto& name = kinds[k];
       std::printf("%-8s %8lld %14.2f %14.3f %14.4f %14.2f %14.2f\n", name.c_str(), static_cast<long long>(costs[k].front().steps),
                   median(setup), median(dem_ms), median(fem_ms), median(wall_share), median(cpu_share));
       rows.push_back({{"integration", name},

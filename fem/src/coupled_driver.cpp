@@ -27,7 +27,7 @@ using adapter::NodeArray;
 
 namespace {
 
-constexpr char kCheckpointMagic[] = "demfem-coupled-fem-state-3";
+constexpr char kCheckpointMagic[] = "demfem-coupled-fem-state-4";
 
 std::string number(double v) {
   char text[32];

@@ -70,6 +70,29 @@ Modes resolvedModes(const ReducedModel& model, double dt_s, double max_omega_dt)
   }
 }
 
+// out += a0 w0 + a1 w1 + a2 w2 + a3 w3 over `rows` entries, summed left to right (as Eigen's
+// expression would); compiled for AVX2 too, chosen at run time.
+[[gnu::target_clones("avx2", "default")]] void addFour(double* __restrict out, const double* a0, const double* a1, const double* a2,
+                                                       const double* a3, const double (&w)[4], Eigen::Index rows) {
+  for (Eigen::Index i = 0; i < rows; ++i) out[i] += a0[i] * w[0] + a1[i] * w[1] + a2[i] * w[2] + a3[i] * w[3];
+}
+
+// out = sum_k A.col(columns[k]) * weights(k): the product of A's columns at the loaded DOFs with
+// their forces, four columns per pass over `out` (no gathered copy of the columns).
+void addColumns(const Eigen::MatrixXd& A, const std::vector<Eigen::Index>& columns, const Eigen::VectorXd& weights,
+                Eigen::VectorXd& out) {
+  out.setZero(A.rows());
+  const std::size_t n = columns.size();
+  std::size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    const auto w = [&](std::size_t j) { return weights(static_cast<Eigen::Index>(j)); };
+    const double four[4] = {w(k), w(k + 1), w(k + 2), w(k + 3)};
+    addFour(out.data(), A.col(columns[k]).data(), A.col(columns[k + 1]).data(), A.col(columns[k + 2]).data(),
+            A.col(columns[k + 3]).data(), four, A.rows());
+  }
+  for (; k < n; ++k) out.noalias() += A.col(columns[k]) * weights(static_cast<Eigen::Index>(k));
+}
+
 }  // namespace
 
 ModalIntegrator::ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping, double max_omega_dt)
@@ -93,50 +116,51 @@ ModalIntegrator::ModalIntegrator(const ReducedModel& model, double dt_s, Rayleig
   residual_ = 0.5 * (residual_ + residual_.transpose()).eval();
   const Eigen::MatrixXd K_cf = model.K(cell_, free_), M_cf = model.M(cell_, free_);
   cell_stiffness_ = K_cf;
-  ThreeLevelTerms<Eigen::MatrixXd> cell_terms = threeLevelTerms(M_cf, K_cf, damping, dt_s);  // Eq (6)-(8), load-cell rows
-  cell_a1_ = std::move(cell_terms.A1);
-  cell_a2_ = std::move(cell_terms.A2);
-  cell_a3_ = std::move(cell_terms.A3);
+  const ThreeLevelTerms<Eigen::MatrixXd> cell_terms = threeLevelTerms(M_cf, K_cf, damping, dt_s);  // Eq (6)-(8), load-cell rows
+  const auto cells = static_cast<Eigen::Index>(cell_.size());
+  cell_terms_residual_.resize(3 * cells, residual_.cols());
+  cell_terms_residual_.middleRows(0, cells).noalias() = cell_terms.A1 * residual_;
+  cell_terms_residual_.middleRows(cells, cells).noalias() = cell_terms.A2 * residual_;
+  cell_terms_residual_.middleRows(2 * cells, cells).noalias() = cell_terms.A3 * residual_;
   recursion_ = std::make_unique<ModalRecursion>(omega2, K_cf * phi_, M_cf * phi_, damping, dt_s);
   lag_a1_ = damping.alpha_s / (2 * dt_s) + 1.0 / 3;
   lag_a3_ = damping.alpha_s / (2 * dt_s) - 1.0 / 3;
+  u_ = Eigen::VectorXd::Zero(dofs_);
+  loaded_.reserve(free_.size());
+  loaded_force_.resize(static_cast<Eigen::Index>(free_.size()));
   start(Eigen::VectorXd::Zero(dofs_));
 }
 
-Eigen::VectorXd ModalIntegrator::modalForce(const Eigen::VectorXd& f, std::vector<Eigen::Index>& nonzero) const {
-  nonzero.clear();
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(phi_t_.rows());
+// loaded_, loaded_force_: the free DOFs where `f` is nonzero and its values there.
+void ModalIntegrator::gatherLoad(const Eigen::VectorXd& f) {
+  loaded_.clear();
   for (std::size_t i = 0; i < free_.size(); ++i) {
     const double v = f(free_[i]);
     if (v == 0) continue;
-    nonzero.push_back(static_cast<Eigen::Index>(i));
-    g.noalias() += v * phi_t_.col(static_cast<Eigen::Index>(i));
+    loaded_force_(static_cast<Eigen::Index>(loaded_.size())) = v;
+    loaded_.push_back(static_cast<Eigen::Index>(i));
   }
-  return g;
-}
-
-// The static response R f (free DOFs) of the modes left out to the applied force `f`.
-Eigen::VectorXd ModalIntegrator::residualOf(const Eigen::VectorXd& f, const std::vector<Eigen::Index>& nonzero) const {
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(residual_.rows());
-  for (Eigen::Index i : nonzero) z.noalias() += f(free_[static_cast<std::size_t>(i)]) * residual_.col(i);
-  return z;
 }
 
 // u and the load-cell reactions of level i from the modal and residual states of that level.
 void ModalIntegrator::assemble() {
-  u_ = Eigen::VectorXd::Zero(dofs_);
-  u_(free_) = phi_ * modal_.q + v_;
-  cell_reaction_ = modal_.reaction + r_ - Eigen::VectorXd(applied_(cell_));  // total minus applied (Eq 10)
+  u_free_.noalias() = phi_ * modal_.q;
+  u_free_ += v_;
+  for (std::size_t i = 0; i < free_.size(); ++i) u_(free_[i]) = u_free_(static_cast<Eigen::Index>(i));
+  cell_reaction_ = modal_.reaction + r_;
+  for (std::size_t c = 0; c < cell_.size(); ++c) cell_reaction_(static_cast<Eigen::Index>(c)) -= applied_(cell_[c]);  // total minus applied (Eq 10)
 }
 
 void ModalIntegrator::start(const Eigen::VectorXd& f0) {
   if (f0.size() != dofs_) throw std::invalid_argument("modal integrator start: force vector has the wrong size");
-  std::vector<Eigen::Index> nonzero;
-  g_ = modalForce(f0, nonzero);
+  gatherLoad(f0);
+  addColumns(phi_t_, loaded_, loaded_force_, g_);
   g_prev_ = g_;
   modal_ = recursion_->atRest(g_);
-  z_ = residualOf(f0, nonzero);
+  addColumns(residual_, loaded_, loaded_force_, z_);
   z_prev_ = v_ = v_prev_ = z_;  // at rest: the static response
+  addColumns(cell_terms_residual_, loaded_, loaded_force_, y_);
+  y_prev_ = p_ = p_prev_ = y_;
   r_ = r_prev_ = cell_stiffness_ * v_;
   applied_ = f0;
   step_ = 0;
@@ -148,22 +172,24 @@ const Eigen::VectorXd& ModalIntegrator::step(const Eigen::VectorXd& applied_next
     throw std::invalid_argument("modal integrator step: force vector has " + std::to_string(applied_next.size()) + " entries, expected " +
                                 std::to_string(dofs_));
   if (!applied_next.allFinite()) throw std::invalid_argument("modal integrator step: force vector contains NaN or infinity");
-  std::vector<Eigen::Index> nonzero;
-  Eigen::VectorXd g_next = modalForce(applied_next, nonzero);
-  recursion_->step((g_next + g_ + g_prev_) / 3, modal_);  // Eq (9) per mode, Eq (10) per load-cell DOF
-  g_prev_ = std::move(g_);
-  g_ = std::move(g_next);
-  Eigen::VectorXd z_next = residualOf(applied_next, nonzero);
-  // Eq (5) without inertia on the modes left out: alpha (v+ - v-) / (2 dt) + (v+ + v + v-) / 3 = R f_bar,
-  // then their share of the load-cell forces by Eq (10).
-  Eigen::VectorXd v_next = (((z_next + z_ + z_prev_) / 3 - v_ / 3 + lag_a3_ * v_prev_) / lag_a1_).eval();
-  Eigen::VectorXd r_next = 3 * (cell_a1_ * v_next - cell_a2_ * v_ - cell_a3_ * v_prev_) - r_ - r_prev_;
-  v_prev_ = std::move(v_);
-  v_ = std::move(v_next);
-  z_prev_ = std::move(z_);
-  z_ = std::move(z_next);
-  r_prev_ = std::move(r_);
-  r_ = std::move(r_next);
+  gatherLoad(applied_next);
+  addColumns(phi_t_, loaded_, loaded_force_, g_next_);
+  recursion_->step((g_next_ + g_ + g_prev_) / 3, modal_);  // Eq (9) per mode, Eq (10) per load-cell DOF
+  addColumns(residual_, loaded_, loaded_force_, z_next_);
+  addColumns(cell_terms_residual_, loaded_, loaded_force_, y_next_);
+  // Eq (5) without inertia on the modes left out: alpha (v+ - v-) / (2 dt) + (v+ + v + v-) / 3 = R f_bar;
+  // the same recursion carries the load-cell rows of Eq (6)-(8) applied to v.
+  v_next_ = ((z_next_ + z_ + z_prev_) / 3 - v_ / 3 + lag_a3_ * v_prev_) / lag_a1_;
+  p_next_ = ((y_next_ + y_ + y_prev_) / 3 - p_ / 3 + lag_a3_ * p_prev_) / lag_a1_;
+  // Their share of the load-cell forces by Eq (10): 3 (A1 v+ - A2 v - A3 v-) - r - r-.
+  const auto cells = static_cast<Eigen::Index>(cell_.size());
+  r_next_ = 3 * (p_next_.head(cells) - p_.segment(cells, cells) - p_prev_.tail(cells)) - r_ - r_prev_;
+  std::swap(g_prev_, g_), std::swap(g_, g_next_);
+  std::swap(z_prev_, z_), std::swap(z_, z_next_);
+  std::swap(v_prev_, v_), std::swap(v_, v_next_);
+  std::swap(y_prev_, y_), std::swap(y_, y_next_);
+  std::swap(p_prev_, p_), std::swap(p_, p_next_);
+  std::swap(r_prev_, r_), std::swap(r_, r_next_);
   applied_ = applied_next;
   ++step_;
   assemble();
@@ -177,21 +203,24 @@ Eigen::VectorXd ModalIntegrator::reactions() const {
 }
 
 SavedIntegratorState ModalIntegrator::save() const {
-  return {step_, {modal_.q, modal_.q_prev, modal_.reaction, modal_.reaction_prev, g_, g_prev_, z_, z_prev_, v_, v_prev_, r_, r_prev_, applied_}};
+  return {step_, {modal_.q, modal_.q_prev, modal_.reaction, modal_.reaction_prev, g_, g_prev_, z_, z_prev_, v_, v_prev_, y_, y_prev_, p_, p_prev_,
+                  r_, r_prev_, applied_}};
 }
 
 void ModalIntegrator::restore(const SavedIntegratorState& saved) {
   const auto& v = saved.vectors;
   const Eigen::Index modes = recursion_->modeCount(), cells = static_cast<Eigen::Index>(cell_.size());
   const auto n = static_cast<Eigen::Index>(free_.size());
-  const std::vector<Eigen::Index> sizes{modes, modes, cells, cells, modes, modes, n, n, n, n, cells, cells, dofs_};
+  const std::vector<Eigen::Index> sizes{modes, modes, cells, cells, modes, modes, n, n, n, n, 3 * cells, 3 * cells, 3 * cells, 3 * cells,
+                                        cells, cells, dofs_};
   bool matches = v.size() == sizes.size();
   for (std::size_t i = 0; matches && i < sizes.size(); ++i) matches = v[i].size() == sizes[i];
   if (!matches)
     throw std::invalid_argument("modal integrator restore: not the state of a modal integration of this model (" +
                                 std::to_string(modes) + " modes)");
   modal_ = {v[0], v[1], v[2], v[3]};
-  g_ = v[4], g_prev_ = v[5], z_ = v[6], z_prev_ = v[7], v_ = v[8], v_prev_ = v[9], r_ = v[10], r_prev_ = v[11], applied_ = v[12];
+  g_ = v[4], g_prev_ = v[5], z_ = v[6], z_prev_ = v[7], v_ = v[8], v_prev_ = v[9];
+  y_ = v[10], y_prev_ = v[11], p_ = v[12], p_prev_ = v[13], r_ = v[14], r_prev_ = v[15], applied_ = v[16];
   step_ = saved.step;
   assemble();
 }

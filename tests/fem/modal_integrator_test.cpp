@@ -126,6 +126,71 @@ TEST_CASE("the modal integration at rest under a constant load is the static sol
   CHECK((modal.displacement() - exact.displacement).norm() < 1e-8 * exact.displacement.norm());
 }
 
+TEST_CASE("the modal step projects any number of loaded DOFs: 1 to 9 give the full integration's response, superposed exactly", "[fem]") {
+  // The step takes the loaded columns four at a time and the rest one by one (fem/src/modal.cpp):
+  // every remainder of 4 is run against the full integration and against the sum of the responses
+  // to each loaded DOF alone (linearity: equal to round-off).
+  const study::Tool tool = smallPmmaTool();
+  const ReducedModel model = reduce(buildFullModel(tool));
+  const RayleighDamping damping{tool.fem.alpha_s, tool.fem.beta_per_s};
+  const Sensors sensors(model, tool);
+  ThreeLevelIntegrator full(model, 1e-3, damping);
+  ModalIntegrator modal(model, 1e-3, damping);
+  std::vector<int> front;  // z DOFs of the front face's lowest 20 mm, tip first
+  for (int k = 0; k < model.keypointCount(); ++k)
+    if (model.keypoints(k, 1) <= 0.020 + 1e-9 && model.keypoints(k, 2) > 0) front.push_back(3 * k + 2);
+  REQUIRE(front.size() >= 9);
+  // A step load switched on at t = 0 plus a 150 Hz fluctuation, different on each DOF.
+  const auto load = [&](const std::vector<int>& dofs, int step) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(model.dofCount());
+    for (std::size_t j = 0; j < dofs.size(); ++j)
+      f(dofs[j]) = -0.5 - 0.2 * std::sin(2 * M_PI * 150 * 1e-3 * step + static_cast<double>(j));
+    return f;
+  };
+  const int steps = 80;
+  const auto response = [&](TimeIntegrator& integrator, const std::vector<int>& dofs) {
+    std::vector<Eigen::VectorXd> u;
+    std::vector<double> force;
+    integrator.start(Eigen::VectorXd::Zero(model.dofCount()));
+    for (int i = 1; i <= steps; ++i) {
+      u.push_back(integrator.step(load(dofs, i)));
+      force.push_back(sensors.read(u.back(), integrator.reactions()).load_cell_N);
+    }
+    return std::pair{u, force};
+  };
+  for (std::size_t count = 1; count <= 9; ++count) {
+    CAPTURE(count);
+    const std::vector<int> dofs(front.begin(), front.begin() + static_cast<std::ptrdiff_t>(count));
+    const auto [u_modal, f_modal] = response(modal, dofs);
+    const auto [u_full, f_full] = response(full, dofs);
+    double u_max = 0, u_dev = 0, f_max = 0, f_dev = 0;
+    for (int i = 0; i < steps; ++i) {
+      u_max = std::max(u_max, u_full[static_cast<std::size_t>(i)].cwiseAbs().maxCoeff());
+      u_dev = std::max(u_dev, (u_modal[static_cast<std::size_t>(i)] - u_full[static_cast<std::size_t>(i)]).cwiseAbs().maxCoeff());
+      f_max = std::max(f_max, std::abs(f_full[static_cast<std::size_t>(i)]));
+      f_dev = std::max(f_dev, std::abs(f_modal[static_cast<std::size_t>(i)] - f_full[static_cast<std::size_t>(i)]));
+    }
+    CHECK(u_dev < 1e-3 * u_max);
+    CHECK(f_dev < 1e-3 * f_max);
+    // Superposition: the DOFs one at a time (each with its own fluctuation phase).
+    std::vector<Eigen::VectorXd> u_sum(steps, Eigen::VectorXd::Zero(model.dofCount()));
+    std::vector<double> f_sum(steps, 0.0);
+    for (std::size_t j = 0; j < count; ++j) {
+      modal.start(Eigen::VectorXd::Zero(model.dofCount()));
+      for (int i = 1; i <= steps; ++i) {
+        Eigen::VectorXd f = Eigen::VectorXd::Zero(model.dofCount());
+        f(dofs[j]) = load(dofs, i)(dofs[j]);
+        u_sum[static_cast<std::size_t>(i - 1)] += modal.step(f);
+        f_sum[static_cast<std::size_t>(i - 1)] += sensors.read(modal.displacement(), modal.reactions()).load_cell_N;
+      }
+    }
+    for (int i = 0; i < steps; ++i) {
+      CHECK((u_sum[static_cast<std::size_t>(i)] - u_modal[static_cast<std::size_t>(i)]).cwiseAbs().maxCoeff() < 1e-12 * u_max);
+      CHECK(std::abs(f_sum[static_cast<std::size_t>(i)] - f_modal[static_cast<std::size_t>(i)]) < 1e-12 * f_max);
+    }
+  }
+}
+
 TEST_CASE("a saved modal integration state resumes the run bit for bit", "[fem]") {
   const study::Tool tool = smallPmmaTool();
   const ReducedModel model = reduce(buildFullModel(tool));

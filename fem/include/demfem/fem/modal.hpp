@@ -23,8 +23,12 @@
 //   only (Eq 10 on the modes and on v); reactions() is zero at the other fixed DOFs. Agreement with
 //   ThreeLevelIntegrator on load cell and deformation: within 0.1 % of the signal's range
 //   (tests/fem/modal_integrator_test.cpp; figures in docs/fem.md).
-// - Cost per step: (modes + nonzero force entries) x free DOFs multiply-adds; the DEM's forces are
-//   nonzero only on the keypoints in contact, so the step skips zero force entries.
+// - Cost per step: (modes + nonzero force entries) x free DOFs multiply-adds, no allocation of a
+//   DOF-sized vector. Only the nonzero entries of the applied force are projected (the DEM's forces
+//   are nonzero only on the keypoints in contact): g = Phi^T f and z = R f from those columns of
+//   Phi^T and R. The load-cell share of v needs no product with v: v follows a scalar recursion per
+//   DOF, so the load-cell rows of Eq (6)-(8) applied to v follow the same recursion driven by those
+//   rows applied to z, i.e. by the precomputed columns of (Eq 6-8 rows) R at the loaded DOFs.
 #pragma once
 
 #include "demfem/fem/integrator.hpp"
@@ -90,27 +94,32 @@ class ModalIntegrator : public TimeIntegrator {
   double highestModeHz() const { return highest_mode_Hz_; }
 
  private:
-  Eigen::VectorXd modalForce(const Eigen::VectorXd& f, std::vector<Eigen::Index>& nonzero) const;
-  Eigen::VectorXd residualOf(const Eigen::VectorXd& f, const std::vector<Eigen::Index>& nonzero) const;
+  void gatherLoad(const Eigen::VectorXd& f);
   void assemble();
 
   int dofs_ = 0;
   std::vector<int> free_, cell_;       // free DOFs; load-cell DOFs (reaction functionals)
-  Eigen::MatrixXd phi_, phi_t_;        // free x modes and its transpose
-  Eigen::MatrixXd residual_;           // R on the free DOFs (symmetric)
+  Eigen::MatrixXd phi_;                // free x modes
+  Eigen::MatrixXd phi_t_;              // Phi^T: modes x free (a column per free DOF)
+  Eigen::MatrixXd residual_;           // R on the free DOFs (symmetric; a column per free DOF)
   Eigen::MatrixXd cell_stiffness_;     // K_cf: load-cell DOFs x free DOFs
-  Eigen::MatrixXd cell_a1_, cell_a2_, cell_a3_;  // Eq (6)-(8) on the load-cell rows
+  Eigen::MatrixXd cell_terms_residual_;  // [A1; A2; A3] (Eq 6-8, load-cell rows) R: 3 cells x free
   std::unique_ptr<ModalRecursion> recursion_;
   double lag_a1_ = 0, lag_a3_ = 0;     // Eq (5) without inertia, on the modes left out
   double highest_mode_Hz_ = 0;
   std::int64_t step_ = 0;
   ModalRecursion::State modal_;
-  Eigen::VectorXd g_, g_prev_;         // modal forces of levels i, i-1
-  Eigen::VectorXd z_, z_prev_;         // R f of levels i, i-1
-  Eigen::VectorXd v_, v_prev_;         // residual displacement of levels i, i-1 (free DOFs)
-  Eigen::VectorXd r_, r_prev_;         // Eq (10) load-cell forces of the residual, levels i, i-1
+  Eigen::VectorXd g_, g_prev_, g_next_;  // modal forces of levels i, i-1, i+1
+  Eigen::VectorXd z_, z_prev_, z_next_;  // R f of levels i, i-1, i+1 (free DOFs)
+  Eigen::VectorXd v_, v_prev_, v_next_;  // residual displacement of levels i, i-1, i+1 (free DOFs)
+  Eigen::VectorXd y_, y_prev_, y_next_;  // [A1; A2; A3] z at the load-cell rows, levels i, i-1, i+1
+  Eigen::VectorXd p_, p_prev_, p_next_;  // [A1; A2; A3] v at the load-cell rows, levels i, i-1, i+1
+  Eigen::VectorXd r_, r_prev_, r_next_;  // Eq (10) load-cell forces of the residual, levels i, i-1, i+1
   Eigen::VectorXd applied_, u_;        // applied force and displacement of level i
+  Eigen::VectorXd u_free_;             // u of level i on the free DOFs
   Eigen::VectorXd cell_reaction_;      // reactions at cell_ of level i
+  std::vector<Eigen::Index> loaded_;   // free-DOF indices of the nonzero entries of the last applied force
+  Eigen::VectorXd loaded_force_;       // those entries (N)
 };
 
 // Modes and static solutions of a reduced model whose stiffness is K(e, s) = e (K_ref - S) + s S, S
