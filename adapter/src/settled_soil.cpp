@@ -217,6 +217,14 @@ std::string unsettledReason(const SettlingFigures& s) {
   return reason;
 }
 
+std::string unsettledSoilMessage(const std::filesystem::path& file, const SettlingFigures& settling) {
+  const std::string reason = unsettledReason(settling);
+  if (reason.empty()) return reason;
+  return "the settled soil " + file.string() + " is not settled: " + reason +
+         ". Raise soil.deposition.settle_kinetic_energy_J and deposit it again (demfem deposit --force), "
+         "or run on it anyway with --allow-unsettled-soil";
+}
+
 std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path& file, const std::string& checksum) {
   const SettlingFigures& s = soil.settling;
   const nlohmann::json record{{"file", file.string()},

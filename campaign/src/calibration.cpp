@@ -43,6 +43,8 @@ class Evaluator {
         cases_(casesOf(recordings)) {
     for (const auto& key : cases_) caseStudy(study_, origin_, key);  // every case runnable (ArgumentError otherwise)
     measured_ = quantities(recordings, options.objective, false);
+    if (options.kind == ObjectiveKind::Noisy && options.model_scatters_like_repeats)
+      for (Quantity& q : measured_) q.sigma = std::hypot(q.sigma, q.repeat_sd / std::sqrt(std::max(1, options.model_seeds)));
     if (!options.cache_dir.empty()) cache_.emplace(options.cache_dir);
     scratch_ = options.cache_dir.empty() ? fs::temp_directory_path() / ("demfem-calibrate-" + std::to_string(getpid()))
                                          : options.cache_dir / ("scratch-" + std::to_string(getpid()));  // one per process: a cache may be shared

@@ -282,8 +282,12 @@ double errorPercent(const std::vector<Residual>& residuals) {
 }
 
 Diagnosis diagnose(const ordered_json& study, const std::string& origin, const std::vector<analysis::Recording>& recordings, Model& model,
-                   const DiagnosisSettings& settings) {
+                   const DiagnosisSettings& given) {
   const auto start = Clock::now();
+  // The model's seed scatter is measured here (step 5) and widens the comparison; the fits keep
+  // the measured sigma so that it is not counted twice.
+  DiagnosisSettings settings = given;
+  settings.calibration.model_scatters_like_repeats = false;
   Diagnosis d;
   d.measured = recordings;
   const std::vector<const Cause*> causes = candidates(recordings, settings);

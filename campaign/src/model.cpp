@@ -129,10 +129,8 @@ void SoilBinModel::prepareSoil(const study::Study& s) const {
     else
       builtin::makeBackend(s);  // deposits the soil and writes its file (backend.hpp)
   }
-  const std::string reason = adapter::unsettledReason(adapter::readSettledSoil(file, s).settling);
-  if (!reason.empty() && !allow_unsettled_soil_)
-    throw ArgumentError("study '" + s.name + "': its soil " + file.string() + " is not settled: " + reason +
-                        ". Raise soil.deposition.settle_kinetic_energy_J, or run on it anyway with --allow-unsettled-soil");
+  const std::string message = adapter::unsettledSoilMessage(file, adapter::readSettledSoil(file, s).settling);
+  if (!message.empty() && !allow_unsettled_soil_) throw ArgumentError("study '" + s.name + "': " + message);
 }
 
 void SoilBinModel::relabelPacking(const study::Study& s, const std::filesystem::path& file) const {

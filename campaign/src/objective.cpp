@@ -27,7 +27,7 @@ Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::
     for (const auto& e : repeats) between += (e.value - mean) * (e.value - mean) / (R - 1);
   }
   const double sigma = std::sqrt(std::max(between, own) / R);
-  return {key, name, mean, std::max(sigma, floor * std::abs(mean))};
+  return {key, name, mean, std::max(sigma, floor * std::abs(mean)), std::sqrt(between)};
 }
 
 void addWeightRun(const analysis::Recording& rec, CaseEstimates& out) {

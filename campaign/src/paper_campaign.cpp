@@ -111,11 +111,8 @@ void depositSoils(const std::vector<Case>& cases, const CampaignOptions& o) {
       builtin::makeBackend(c.study, [&](double fraction, const std::string& stage_line) {  // deposits and writes it (builtin/backend.hpp)
         if (o.on_deposit) o.on_deposit(c.status.name, fraction, stage_line);
       });
-    const std::string reason = adapter::unsettledReason(adapter::readSettledSoil(file, c.study).settling);
-    if (!reason.empty() && !o.allow_unsettled_soil)
-      throw ArgumentError("case " + c.status.name + ": its soil " + file.string() + " is not settled: " + reason +
-                          "; no case was run. Raise soil.deposition.settle_kinetic_energy_J and remove that file to deposit "
-                          "it again, or run on it anyway with --allow-unsettled-soil");
+    const std::string message = adapter::unsettledSoilMessage(file, adapter::readSettledSoil(file, c.study).settling);
+    if (!message.empty() && !o.allow_unsettled_soil) throw ArgumentError("case " + c.status.name + " (no case was run): " + message);
   }
 }
 

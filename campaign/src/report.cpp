@@ -127,7 +127,12 @@ std::string objectiveText(const CalibrationOptions& o) {
          std::string(o.objective.soil_deformation ? " and deformation_mm" : "") +
          " over the Section 2.3 window. Measured value = mean over repeats; sigma = its scatter (between repeats, or the fits' "
          "standard errors / the window samples' standard error, whichever is larger, over sqrt(repeats)), at least " +
-         number(100 * o.objective.relative_floor) + " % of the measured value. Uncertainty: local curvature (Gauss-Newton, "
+         number(100 * o.objective.relative_floor) + " % of the measured value" +
+         std::string(o.kind == ObjectiveKind::Noisy && o.model_scatters_like_repeats
+                         ? "; widened by the model's own seed scatter, taken as the measured repeats' standard deviation s: "
+                           "sigma' = sqrt(sigma^2 + s^2 / " + std::to_string(std::max(1, o.model_seeds)) + " model seeds)"
+                         : "") +
+         ". Uncertainty: local curvature (Gauss-Newton, "
          "Delta chi2 = 1); a parameter whose standard deviation exceeds " + number(100 * o.unidentified_fraction) +
          " % of its bounds or " + number(100 * o.unidentified_relative) + " % of its value is unidentified. Distinct minima: starts ending within Delta chi2 = " + number(o.noise_chi2) +
          " of the best and more than 3 sigma away from it.\n";

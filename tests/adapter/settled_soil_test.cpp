@@ -139,6 +139,15 @@ TEST_CASE("a soil is settled only if its final phase met the threshold within it
   CHECK_THAT(adapter::unsettledReason(s), Catch::Contains("not below"));
 }
 
+TEST_CASE("the refusal of an unsettled soil names the file, the reason, the fix and the override", "[adapter][soil]") {
+  adapter::SettlingFigures s{3.5e-7, 1e-6, 5, 0, false, 2.0, 0.05, 0.55};
+  CHECK(adapter::unsettledSoilMessage("soils/soil-x.bin", s).empty());
+  s.kinetic_energy_J = 2e-6;
+  CHECK_THAT(adapter::unsettledSoilMessage("soils/soil-x.bin", s),
+             Catch::Contains("soils/soil-x.bin") && Catch::Contains("2e-06 J is not below") &&
+                 Catch::Contains("settle_kinetic_energy_J and deposit it again") && Catch::Contains("--allow-unsettled-soil"));
+}
+
 TEST_CASE("surface height and packing fraction follow their definitions", "[adapter][soil]") {
   // Two particles at the top within one diameter of each other, one deep: mean of the two tops.
   const std::vector<adapter::SoilParticle> p{{{0, 0.045, 0}, 0.005, 0}, {{0, 0.040, 0}, 0.005, 0}, {{0, 0.01, 0}, 0.005, 0}};

@@ -6,6 +6,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 using namespace demfem;
 using campaign::test::TempDir;
 
@@ -73,6 +75,35 @@ TEST_CASE("stiffness- and mass-proportional damping from one weight are reported
   CHECK(!r.parameters[1].value);
   CHECK(!r.parameters[2].identified);
   CHECK(!r.parameters[2].value);
+}
+
+TEST_CASE("a noisy objective widens each sigma by the model's seed scatter taken as the repeats'", "[campaign]") {
+  const TempDir dir("widened");
+  const auto recs = recordings(dir, {0.05}, {});  // two repeats with their own noise
+  const auto study = campaign::test::fixtureStudyJson();
+  const std::string origin = campaign::test::fixtureStudyPath().string();
+  campaign::WeightDropModel model;
+  campaign::CalibrationOptions options = quickOptions({});
+  const auto measured = campaign::quantities(recs, options.objective, false);
+  const auto sigmas = [&](campaign::ObjectiveKind kind, int model_seeds, bool like_repeats) {
+    options.kind = kind, options.model_seeds = model_seeds, options.model_scatters_like_repeats = like_repeats;
+    std::vector<double> out;
+    for (const auto& r : campaign::predict(study, origin, recs, model, options)) out.push_back(r.sigma);
+    return out;
+  };
+  const auto smooth = sigmas(campaign::ObjectiveKind::Smooth, 1, true);
+  const auto one_seed = sigmas(campaign::ObjectiveKind::Noisy, 1, true);
+  const auto four_seeds = sigmas(campaign::ObjectiveKind::Noisy, 4, true);
+  const auto measured_scatter = sigmas(campaign::ObjectiveKind::Noisy, 1, false);  // diagnose measures it instead
+  REQUIRE(smooth.size() == measured.size());
+  for (std::size_t i = 0; i < measured.size(); ++i) {
+    INFO(measured[i].name);
+    CHECK(measured[i].repeat_sd > 0);
+    CHECK(smooth[i] == measured[i].sigma);
+    CHECK(measured_scatter[i] == measured[i].sigma);
+    CHECK(one_seed[i] == Approx(std::hypot(measured[i].sigma, measured[i].repeat_sd)).epsilon(1e-12));
+    CHECK(four_seeds[i] == Approx(std::hypot(measured[i].sigma, measured[i].repeat_sd / 2)).epsilon(1e-12));
+  }
 }
 
 TEST_CASE("bad --fit arguments are errors naming the argument", "[campaign]") {

@@ -11,11 +11,8 @@ adapter::SettledSoil depositWith(const std::string& backend, const study::Study&
 }
 
 void requireSettled(const adapter::SettledSoil& soil, const std::filesystem::path& file, bool allow_unsettled) {
-  const std::string reason = adapter::unsettledReason(soil.settling);
-  if (reason.empty() || allow_unsettled) return;
-  throw InputError("the settled soil " + file.string() + " is not settled: " + reason +
-                   ". Raise soil.deposition.settle_kinetic_energy_J and deposit it again (demfem deposit --force), "
-                   "or run on it anyway with --allow-unsettled-soil");
+  const std::string message = adapter::unsettledSoilMessage(file, soil.settling);
+  if (!message.empty() && !allow_unsettled) throw InputError(message);
 }
 
 namespace {

@@ -89,6 +89,9 @@ double packingFraction(const std::vector<SoilParticle>& particles, const study::
 // energy is not below the threshold. An earlier phase that hit its cap only poured the next layer
 // onto a pack still moving; what is kept is the final phase's soil at rest.
 std::string unsettledReason(const SettlingFigures& settling);
+// The one refusal text for running on an unsettled soil ("" if it is settled): names the file and
+// the reason, and says how to fix it (a higher threshold and a new deposition) or to override it.
+std::string unsettledSoilMessage(const std::filesystem::path& file, const SettlingFigures& settling);
 
 // The soil's figures as the JSON object text a run records ("soil" in sensors.json): file,
 // file_checksum, soil_hash, deposition_backend, deposition_seed, deposition_cores, particles,

@@ -6,7 +6,12 @@
 // - Problem: a study file (JSON, file units), its origin, measured recordings (their cases say which
 //   model runs are needed; caseStudy() derives each case's study) and the parameters. Every case of
 //   the recordings must be runnable by the study's kind, otherwise ArgumentError naming the case.
-// - Objective: chi2 of objective.hpp over all cases of all recordings.
+// - Objective: chi2 of objective.hpp over all cases of all recordings. A noisy objective with
+//   `model_scatters_like_repeats` widens each measured sigma by the model's own seed scatter,
+//   sigma' = sqrt(sigma^2 + s^2 / model_seeds), s the measured repeats' standard deviation: a model
+//   of the same process scatters between deposition seeds as the process does between repeats, so
+//   a fit, its curvature and its identification see the noise of both sides (a case measured once
+//   has no s and is not widened). Residuals carry sigma'.
 // - Optimiser (optimiser coordinates x in [0, 1]^n, parameters.hpp): `starts` starts, the first at
 //   the study's own values (clamped into the bounds), the others at the points of a Halton
 //   sequence; each a local NLopt run: BOBYQA (COBYLA for one parameter) for smooth objectives
@@ -80,6 +85,9 @@ struct CalibrationOptions {
   // runs pooled like measured repeats (objective.hpp): the model's seed scatter averages out as the
   // measured one does.
   int model_seeds = 1;
+  // Noisy objectives: widen sigma by the model's seed scatter taken as the measured repeats' (see
+  // the contract). Off where the model's scatter is measured instead (diagnose.hpp).
+  bool model_scatters_like_repeats = true;
   std::filesystem::path cache_dir;
   std::function<void(const CalibrationProgress&)> on_progress;
   std::function<bool()> stop_requested;

@@ -47,6 +47,7 @@ struct Quantity {
   analysis::CaseKey key;
   std::string name;  // "step_force_N", "frequency_Hz", "window_mean_force_N", ... (see header comment)
   double value = 0, sigma = 0;
+  double repeat_sd = 0;  // standard deviation between the repeats' values (0 for one repeat)
 };
 
 // The quantities of every case of `recordings`. tolerate_failures = false: a recording that cannot
