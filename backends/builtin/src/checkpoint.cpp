@@ -54,7 +54,7 @@ void DemSimulation::saveState(adapter::PayloadWriter& out) const {
   out.putVector(nb_stiff_);
   out.putVector(nb_hist_);
   out.putVector(nb_touch_);
-  out.putVector(thread_window_end_);
+  out.putVector(part_window_end_);
   out.putVector(planes_);
   out.put(static_cast<std::uint64_t>(meshes_.size()));
   for (std::size_t m = 0; m < meshes_.size(); ++m) {
@@ -109,7 +109,7 @@ DemSimulation DemSimulation::withState(adapter::PayloadReader& in) const {
   in.getVector(s.nb_stiff_);
   in.getVector(s.nb_hist_);
   in.getVector(s.nb_touch_);
-  in.getVector(s.thread_window_end_);
+  in.getVector(s.part_window_end_);
   in.getVector(s.planes_);
   if (in.get<std::uint64_t>() != meshes_.size()) in.fail("mesh count differs from this simulation's");
   for (std::size_t m = 0; m < meshes_.size(); ++m) {
@@ -196,9 +196,9 @@ void DemSimulation::checkRestoredAgainst(const DemSimulation& live, const adapte
   for (const auto& k : nb_stiff_)
     require(std::isfinite(k.kn) && std::isfinite(k.kt) && std::isfinite(k.gamma_n) && std::isfinite(k.gamma_t),
             "a pair stiffness is not finite");
-  require(thread_window_end_.empty() || thread_window_end_.size() == static_cast<std::size_t>(threads_),
-          "thread windows have the wrong count");
-  for (const auto end : thread_window_end_) require(end <= n, "a thread window ends past the particles");
+  require(part_window_end_.empty() || part_window_end_.size() == static_cast<std::size_t>(threads_),
+          "part windows have the wrong count");
+  for (const auto end : part_window_end_) require(end <= n, "a part window ends past the particles");
   // Wall candidates and contacts.
   require(isOffsets(wc_start_, n, wc_mesh_.size()) && wc_tri_.size() == wc_mesh_.size() &&
               (!lists_valid_ || (wc_start_.size() == n + 1 && near_plane_.size() == n)) &&

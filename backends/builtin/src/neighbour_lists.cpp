@@ -34,40 +34,34 @@ bool DemSimulation::meshesMovedBeyondSkin() const {
   return false;
 }
 
-// Every thread of the team calls it: the cells and the merge of the rows on thread 0, the rows and
-// the history carry-over on each thread's own particles.
-void DemSimulation::rebuildLists(int tid) {
-  if (tid == 0) buildCellGrid();
-  team_.barrier();
-  buildRows(tid);
-  team_.barrier();
-  if (tid == 0) {
-    const std::size_t n = particleCount();
-    build_j_.clear();
-    for (const auto& t : thread_) build_j_.insert(build_j_.end(), t.rows.begin(), t.rows.end());
-    for (std::size_t i = 0; i < n; ++i) build_start_[i + 1] += build_start_[i];
+// The cells, the merge of the rows and the swap to the new list on the calling thread; the rows and
+// the history carry-over as phases of the team, each part on its own particles.
+void DemSimulation::rebuildLists() {
+  const std::size_t n = particleCount();
+  buildCellGrid();
+  team_.forEachPart([&](int part) { buildRows(part); });
+  build_j_.clear();
+  for (const auto& p : part_) build_j_.insert(build_j_.end(), p.rows.begin(), p.rows.end());
+  for (std::size_t i = 0; i < n; ++i) build_start_[i + 1] += build_start_[i];
+  sizeNextLists();
+  team_.forEachPart([&](int part) { carryHistory(part); });
+  nb_stiff_.swap(next_stiff_);
+  nb_hist_.swap(next_hist_);
+  nb_touch_.swap(next_touch_);
+  part_window_end_.assign(threads_, 0);
+  for (int p = 0; p < threads_; ++p) {
+    std::size_t end = rangeEnd(p);
+    for (std::int32_t s = build_start_[rangeBegin(p)]; s < build_start_[rangeEnd(p)]; ++s)
+      end = std::max(end, static_cast<std::size_t>(build_j_[s]) + 1);
+    part_window_end_[p] = end;
   }
-  team_.barrier();
-  carryHistory(tid);
-  team_.barrier();
-  if (tid == 0) {
-    const std::size_t n = particleCount();
-    thread_window_end_.assign(threads_, 0);
-    for (int t = 0; t < threads_; ++t) {
-      std::size_t end = rangeEnd(t);
-      for (std::int32_t s = build_start_[rangeBegin(t)]; s < build_start_[rangeEnd(t)]; ++s)
-        end = std::max(end, static_cast<std::size_t>(build_j_[s]) + 1);
-      thread_window_end_[t] = end;
-    }
-    nb_start_.swap(build_start_);
-    nb_j_.swap(build_j_);
-    DEMFEM_ASSERT(nb_start_.size() == n + 1 && nb_stiff_.size() == nb_j_.size());
-    buildWallCandidates(grid_);
-    x_build_ = x_;
-    mesh_build_nodes_ = mesh_bin_nodes_;
-    lists_valid_ = true;
-  }
-  team_.barrier();
+  nb_start_.swap(build_start_);
+  nb_j_.swap(build_j_);
+  DEMFEM_ASSERT(nb_start_.size() == n + 1 && nb_stiff_.size() == nb_j_.size());
+  buildWallCandidates(grid_);
+  x_build_ = x_;
+  mesh_build_nodes_ = mesh_bin_nodes_;
+  lists_valid_ = true;
 }
 
 // Cells of edge >= 2 rmax + skin over the particles' bounding box (within the domain).
@@ -104,14 +98,14 @@ void DemSimulation::buildCellGrid() {
   build_start_.assign(n + 1, 0);
 }
 
-// The sorted neighbours j > i within radius_i + radius_j + skin of the thread's rows i; the row
-// lengths go to build_start_[i + 1] (summed to offsets on thread 0).
-void DemSimulation::buildRows(int tid) {
+// The sorted neighbours j > i within radius_i + radius_j + skin of the part's rows i; the row
+// lengths go to build_start_[i + 1] (summed to offsets by rebuildLists).
+void DemSimulation::buildRows(int part) {
   const CellGrid& g = grid_;
-  auto& out = thread_[tid].rows;
+  auto& out = part_[part].rows;
   out.clear();
   std::vector<std::int32_t> row;
-  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     row.clear();
     const int ci = g.cellOf(x_[3 * i], 0), cj = g.cellOf(x_[3 * i + 1], 1), ck = g.cellOf(x_[3 * i + 2], 2);
     for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, g.n[2] - 1); ++k)
@@ -132,19 +126,20 @@ void DemSimulation::buildRows(int tid) {
   }
 }
 
+// The new list's per-slot arrays, sized before the parts fill them.
+void DemSimulation::sizeNextLists() {
+  next_stiff_.assign(build_j_.size(), ContactStiffness{});
+  next_hist_.assign(build_j_.size() * layout_.size, 0.0);
+  next_touch_.assign(build_j_.size(), 0);
+}
+
 // Stiffness per slot of the new list, and the history of the pairs the old list had (rows sorted
-// by j: one merge per row). Thread 0 sized the new arrays; each thread fills its own rows.
-void DemSimulation::carryHistory(int tid) {
+// by j: one merge per row), over the part's own rows.
+void DemSimulation::carryHistory(int part) {
   const std::size_t n = particleCount();
   const int H = layout_.size;
-  if (tid == 0) {
-    next_stiff_.assign(build_j_.size(), ContactStiffness{});
-    next_hist_.assign(build_j_.size() * H, 0.0);
-    next_touch_.assign(build_j_.size(), 0);
-  }
-  team_.barrier();
   const bool carry = nb_start_.size() == n + 1;
-  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     std::int32_t o = carry ? nb_start_[i] : 0;
     const std::int32_t oend = carry ? nb_start_[i + 1] : 0;
     for (std::int32_t s = build_start_[i]; s < build_start_[i + 1]; ++s) {
@@ -159,12 +154,6 @@ void DemSimulation::carryHistory(int tid) {
         for (int h = 0; h < H; ++h) next_hist_[static_cast<std::size_t>(s) * H + h] = nb_hist_[static_cast<std::size_t>(o) * H + h];
       }
     }
-  }
-  team_.barrier();
-  if (tid == 0) {
-    nb_stiff_.swap(next_stiff_);
-    nb_hist_.swap(next_hist_);
-    nb_touch_.swap(next_touch_);
   }
 }
 

@@ -33,20 +33,20 @@ constexpr std::size_t kBatchContacts = 256;  // touching contacts per batch (row
 
 }  // namespace
 
-void DemSimulation::pairForces(int tid) {
-  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { pairLoop<N, R>(tid); });
+void DemSimulation::pairForces(int part) {
+  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { pairLoop<N, R>(part); });
 }
 
 template <study::NormalModel N, study::RollingModel R>
-void DemSimulation::pairLoop(int tid) {
+void DemSimulation::pairLoop(int part) {
   const std::size_t n = particleCount();
   const int H = layout_.size;
   const double dt = dt_;
   constexpr bool kRollingNorm = R == study::RollingModel::Cdt;  // the law needs |w_i - w_j|
-  ThreadState& ts = thread_[tid];
-  // Thread tid owns rows [lo, hi); it writes particles [lo, window_end) only (half list: j > i),
+  PartState& ts = part_[part];
+  // Part `part` owns rows [lo, hi); it writes particles [lo, window_end) only (half list: j > i),
   // so its buffer is cleared and summed over that window alone.
-  const std::size_t lo = rangeBegin(tid), hi = rangeEnd(tid), window_end = thread_window_end_[tid];
+  const std::size_t lo = rangeBegin(part), hi = rangeEnd(part), window_end = part_window_end_[part];
   DEMFEM_ASSERT(nb_start_.size() == n + 1 && window_end >= hi && window_end <= n);
   double* F = f_.data();
   double* Tq = t_.data();
@@ -139,19 +139,19 @@ void DemSimulation::pairLoop(int tid) {
   ts.pair_bad = bad;
 }
 
-// With more than one thread: each particle of this thread's range adds the buffers of the threads
-// whose window holds it, in thread order (the same sums for any partition of the particles).
-void DemSimulation::sumPairForces(int tid) {
+// With more than one part: each particle of this part's range adds the buffers of the parts
+// whose window holds it, in part order (the same sums for any partition of the particles).
+void DemSimulation::sumPairForces(int part) {
   if (threads_ == 1) return;
   const std::size_t n = particleCount();
-  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     double fs[3] = {f_[3 * i], f_[3 * i + 1], f_[3 * i + 2]};
     double tsum[3] = {t_[3 * i], t_[3 * i + 1], t_[3 * i + 2]};
     for (int t = 0; t < threads_; ++t) {
-      if (i < n * t / threads_ || i >= thread_window_end_[t]) continue;
+      if (i < n * t / threads_ || i >= part_window_end_[t]) continue;
       for (int c = 0; c < 3; ++c) {
-        fs[c] += thread_[t].f[3 * i + c];
-        tsum[c] += thread_[t].t[3 * i + c];
+        fs[c] += part_[t].f[3 * i + c];
+        tsum[c] += part_[t].t[3 * i + c];
       }
     }
     for (int c = 0; c < 3; ++c) {

@@ -27,8 +27,8 @@ DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int 
       layout_(HistoryLayout::of(soil.contact)),
       domain_(domain),
       threads_(std::max(1, threads)),
-      team_(threads_),
-      thread_(threads_) {
+      team_(threads_, threads_),
+      part_(threads_) {
   used_.assign(table_.materials.size(), 0);
   if (model_.normal != study::NormalModel::EdemHysteretic)
     for (const auto& m : table_.materials)
@@ -190,11 +190,11 @@ void DemSimulation::run(long steps) {
   for (long s = 0; s < steps; ++s) step();
 }
 
-// Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick, in one run
-// of the team (docs/builtin-dem.md, "Threads on a shared machine"). Each pass over the particles
-// does all it can (the skin check and the force reset ride on the drift, the health check on the
-// second kick). A failure found by any thread stops every thread at the same point; it is raised
-// after the run.
+// Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick, as phases
+// of the team with the serial work between them (docs/builtin-dem.md, "Threads on a shared
+// machine"). Each pass over the particles does all it can (the skin check and the force reset ride
+// on the drift, the health check on the second kick). A failure found in any part stops the step
+// at the same point whichever part found it; it is raised after the phase.
 void DemSimulation::step() {
   const std::size_t n = particleCount();
   DEMFEM_ASSERT(x_.size() == 3 * n && v_.size() == 3 * n && w_.size() == 3 * n && f_.size() == 3 * n && t_.size() == 3 * n &&
@@ -202,35 +202,27 @@ void DemSimulation::step() {
   resetFailures();
   if (step_ == 0 || !lists_valid_) {  // forces of the initial state for the first half kick
     updateMeshBinNodes();
-    team_.run([&](int tid) {
-      rebuildLists(tid);
-      for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) resetForce(i);
-      team_.barrier();
-      contactForces(tid);
+    rebuildLists();
+    team_.forEachPart([&](int part) {
+      for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) resetForce(i);
     });
+    contactForces();
     raiseFailure();
   }
-  team_.run([&](int tid) {
-    drift(tid);
-    team_.barrier();
-    if (tid == 0) {
-      time_ += dt_;
-      ++step_;
-      updateMeshBinNodes();
-      rebuild_ = std::any_of(thread_.begin(), thread_.end(), [](const ThreadState& t) { return t.moved; }) ||
-                 meshesMovedBeyondSkin();
-    }
-    team_.barrier();
-    if (rebuild_) rebuildLists(tid);
-    if (contactForces(tid)) kick(tid);
-  });
+  team_.forEachPart([&](int part) { drift(part); });
+  time_ += dt_;
+  ++step_;
+  updateMeshBinNodes();
+  if (std::any_of(part_.begin(), part_.end(), [](const PartState& p) { return p.moved; }) || meshesMovedBeyondSkin())
+    rebuildLists();
+  if (contactForces()) team_.forEachPart([&](int part) { kick(part); });
   raiseFailure();
 }
 
-void DemSimulation::drift(int tid) {
+void DemSimulation::drift(int part) {
   const double half = 0.5 * dt_, lim2 = 0.25 * skin_ * skin_;
   bool moved = false;
-  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     double d2 = 0;
     for (int c = 0; c < 3; ++c) {
       v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
@@ -242,12 +234,12 @@ void DemSimulation::drift(int tid) {
     if (d2 > lim2) moved = true;
     resetForce(i);
   }
-  thread_[tid].moved = moved;
+  part_[part].moved = moved;
 }
 
-void DemSimulation::kick(int tid) {
+void DemSimulation::kick(int part) {
   const double half = 0.5 * dt_;
-  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     bool ok = true;
     for (int c = 0; c < 3; ++c) {
       v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
@@ -255,36 +247,32 @@ void DemSimulation::kick(int tid) {
       ok = ok && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]) && std::isfinite(w_[3 * i + c]);
       ok = ok && x_[3 * i + c] >= domain_.lo[c] && x_[3 * i + c] <= domain_.hi[c];
     }
-    if (!ok && thread_[tid].kick_bad < 0) thread_[tid].kick_bad = static_cast<std::int64_t>(i);
+    if (!ok && part_[part].kick_bad < 0) part_[part].kick_bad = static_cast<std::int64_t>(i);
   }
 }
 
-// Pair forces, then (unless a pair overlap failed) wall forces; every thread returns the same.
-bool DemSimulation::contactForces(int tid) {
-  pairForces(tid);
-  team_.barrier();
-  const auto failed = [&](std::int64_t ThreadState::*bad) {
-    return std::any_of(thread_.begin(), thread_.end(), [&](const ThreadState& t) { return t.*bad >= 0; });
+// Pair forces, then (unless a pair overlap failed) wall forces; false if a contact failed.
+bool DemSimulation::contactForces() {
+  const auto failed = [&](std::int64_t PartState::*bad) {
+    return std::any_of(part_.begin(), part_.end(), [&](const PartState& p) { return p.*bad >= 0; });
   };
-  if (tid == 0)
-    max_overlap_ = std::max_element(thread_.begin(), thread_.end(), [](const ThreadState& a, const ThreadState& b) {
-                     return a.pair_max < b.pair_max;
-                   })->pair_max;
-  if (failed(&ThreadState::pair_bad)) return false;
-  sumPairForces(tid);
-  wallForces(tid);
-  team_.barrier();
-  if (tid == 0) {
-    gatherWallContacts();
-    scatterWallForces();
-    for (const auto& t : thread_) max_overlap_ = std::max(max_overlap_, t.wall_max);
-  }
-  team_.barrier();
-  return !failed(&ThreadState::wall_bad);
+  team_.forEachPart([&](int part) { pairForces(part); });
+  max_overlap_ = std::max_element(part_.begin(), part_.end(), [](const PartState& a, const PartState& b) {
+                   return a.pair_max < b.pair_max;
+                 })->pair_max;
+  if (failed(&PartState::pair_bad)) return false;
+  team_.forEachPart([&](int part) {
+    sumPairForces(part);
+    wallForces(part);
+  });
+  gatherWallContacts();
+  scatterWallForces();
+  for (const auto& p : part_) max_overlap_ = std::max(max_overlap_, p.wall_max);
+  return !failed(&PartState::wall_bad);
 }
 
 void DemSimulation::resetFailures() {
-  for (auto& t : thread_) {
+  for (auto& t : part_) {
     t.pair_max = t.wall_max = 0;
     t.pair_bad = t.wall_bad = t.kick_bad = -1;
     t.wall_bad_wall = -1;
@@ -294,20 +282,20 @@ void DemSimulation::resetFailures() {
 // The first failure in the order the step meets them: a pair overlap, a wall overlap, a particle
 // that is not finite or left the domain (the lowest particle index of each kind).
 void DemSimulation::raiseFailure() const {
-  const auto first = [&](std::int64_t ThreadState::*bad) {
-    for (const auto& t : thread_)
+  const auto first = [&](std::int64_t PartState::*bad) {
+    for (const auto& t : part_)
       if (t.*bad >= 0) return t.*bad;
     return std::int64_t{-1};
   };
-  if (const auto i = first(&ThreadState::pair_bad); i >= 0) {
+  if (const auto i = first(&PartState::pair_bad); i >= 0) {
     std::ostringstream msg;
     msg << "overlap with a neighbour exceeds " << overlapLimitFraction() << " of the smaller radius (largest overlap "
         << max_overlap_ * 1e3 << " mm); the time step may be too large for the contact stiffness";
     fail(static_cast<std::size_t>(i), msg.str());
   }
-  if (const auto i = first(&ThreadState::wall_bad); i >= 0) fail(static_cast<std::size_t>(i), wallOverlapCause(i));
+  if (const auto i = first(&PartState::wall_bad); i >= 0) fail(static_cast<std::size_t>(i), wallOverlapCause(i));
   std::int64_t bad = -1;
-  for (const auto& t : thread_)
+  for (const auto& t : part_)
     if (t.kick_bad >= 0 && (bad < 0 || t.kick_bad < bad)) bad = t.kick_bad;
   if (bad >= 0) {
     const std::size_t i = static_cast<std::size_t>(bad);
@@ -321,7 +309,7 @@ void DemSimulation::raiseFailure() const {
 // can be too long (docs/builtin-dem.md, "Blow-up detection").
 std::string DemSimulation::wallOverlapCause(std::int64_t particle) const {
   int wall = -1;
-  for (const auto& t : thread_)
+  for (const auto& t : part_)
     if (t.wall_bad == particle) wall = t.wall_bad_wall;
   std::ostringstream msg;
   msg << "overlap with ";
@@ -400,7 +388,7 @@ std::size_t DemSimulation::bytesPerParticle() const {
         wc_mesh_.capacity() + wc_tri_.capacity() + wall_start_.capacity()) * sizeof(std::int32_t);
   b += nb_stiff_.capacity() * sizeof(ContactStiffness) + nb_hist_.capacity() * sizeof(double) + nb_touch_.capacity();
   b += wall_contacts_.capacity() * sizeof(WallContact);
-  for (const auto& t : thread_) b += (t.f.capacity() + t.t.capacity()) * sizeof(double);
+  for (const auto& t : part_) b += (t.f.capacity() + t.t.capacity()) * sizeof(double);
   return b / n;
 }
 

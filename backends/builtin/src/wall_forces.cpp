@@ -192,15 +192,15 @@ Vec3 DemSimulation::wallVelocity(const WallTouch& t) const {
   return v;
 }
 
-void DemSimulation::wallForces(int tid) {
-  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { wallLoop<N, R>(tid); });
+void DemSimulation::wallForces(int part) {
+  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { wallLoop<N, R>(part); });
 }
 
-// The wall contacts of this thread's particles, in particle order, into its own list; the forces
-// go to the particles at once, the reactions to the walls after the gathering (thread 0).
+// The wall contacts of this part's particles, in particle order, into its own list; the forces
+// go to the particles at once, the reactions to the walls after the gathering (serial).
 template <study::NormalModel N, study::RollingModel R>
-void DemSimulation::wallLoop(int tid) {
-  ThreadState& ts = thread_[tid];
+void DemSimulation::wallLoop(int part) {
+  PartState& ts = part_[part];
   auto& out = ts.wall;
   out.clear();
   double local_max = 0;
@@ -208,7 +208,7 @@ void DemSimulation::wallLoop(int tid) {
   WallTouch touch[kMaxWallCandidates];
   bool accepted[kMaxWallCandidates];
   int matched_old[kMaxWallCandidates];
-  for (std::size_t i = rangeBegin(tid); i < rangeEnd(tid); ++i) {
+  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     const int nt = meshTouches(i, touch, planeTouches(i, touch, 0));
     DEMFEM_ASSERT(nt >= 0 && nt <= kMaxWallCandidates);
     if (nt == 0) continue;
@@ -241,15 +241,15 @@ void DemSimulation::wallLoop(int tid) {
   ts.wall_bad = bad;
 }
 
-// The threads' contacts in particle order (the threads' ranges are ascending), with
+// The parts' contacts in particle order (the parts' ranges are ascending), with
 // their CSR offsets per particle.
 void DemSimulation::gatherWallContacts() {
   const std::size_t n = particleCount();
   if (threads_ == 1) {
-    wall_contacts_.swap(thread_[0].wall);  // the old contacts' memory is reused next step
+    wall_contacts_.swap(part_[0].wall);  // the old contacts' memory is reused next step
   } else {
     wall_contacts_.clear();
-    for (const auto& t : thread_) wall_contacts_.insert(wall_contacts_.end(), t.wall.begin(), t.wall.end());
+    for (const auto& t : part_) wall_contacts_.insert(wall_contacts_.end(), t.wall.begin(), t.wall.end());
   }
   wall_start_.assign(n + 1, 0);
   for (const auto& wc : wall_contacts_) ++wall_start_[wc.particle + 1];

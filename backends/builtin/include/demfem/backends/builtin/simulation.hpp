@@ -12,12 +12,14 @@
 //   than skin/2 since the last build; contact history is carried over by (i, j) (pairs) and by
 //   (particle, wall, feature) (walls, with the history handed on when a contact slides from one
 //   feature of a mesh to the next).
-// - Determinism: with the same inputs and thread count, results are bit-identical. Each thread sums
-//   pair forces into its own buffer over a static partition of the particles; the buffers are added
-//   in thread order. Wall contacts are gathered in particle order.
-// - Threads: each simulation owns its team of `threads` threads (a copy gets its own); one step is
-//   one run of the team (docs/builtin-dem.md, "Threads on a shared machine"). A simulation is used
-//   by one caller at a time.
+// - Determinism: with the same inputs and thread count, results are bit-identical. The particles
+//   are split into as many parts as threads (a static partition); each part sums pair forces into
+//   its own buffer and the buffers are added in part order, whichever thread ran each part. Wall
+//   contacts are gathered in particle order.
+// - Threads: each simulation owns its team of `threads` threads (a copy gets its own); a step is a
+//   few phases of the team, each running every part once on whichever threads have a core
+//   (docs/builtin-dem.md, "Threads on a shared machine"). A simulation is used by one caller at a
+//   time.
 // - Time step: setTimeStep() refuses a step above the stability limit of the stiffest spring
 //   (2 sqrt(m*/k_max), explicit central-difference limit of an undamped oscillator).
 // - Failure: run() throws BlowUp naming the particle, the step and what went wrong (NaN, overlap
@@ -171,8 +173,10 @@ class DemSimulation {
     double force[3];                // on the particle
   };
 
-  struct ThreadState {
-    std::vector<double> f, t;            // pair force buffers (more than one thread)
+  // What one part (partition of the particles) keeps from step to step (memory reused) and reports
+  // to the step; whichever thread runs the part uses it.
+  struct PartState {
+    std::vector<double> f, t;            // pair force buffers (more than one part)
     std::vector<WallContact> wall;       // the wall contacts of its particles, in particle order
     std::vector<std::int32_t> rows;      // list build: the neighbours of its rows
     std::vector<std::int32_t> batch_slot;  // pair loop: touching slots of a batch of rows
@@ -194,32 +198,33 @@ class DemSimulation {
     std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; }
   };
 
-  // What one thread of the team keeps from step to step (memory reused) and reports to the others.
-  // Particles [lo, hi) of thread tid (the static partition every loop uses).
-  std::size_t rangeBegin(int tid) const { return particleCount() * tid / threads_; }
-  std::size_t rangeEnd(int tid) const { return particleCount() * (tid + 1) / threads_; }
+  // Particles [lo, hi) of part `part` (the static partition every loop uses).
+  std::size_t rangeBegin(int part) const { return particleCount() * part / threads_; }
+  std::size_t rangeEnd(int part) const { return particleCount() * (part + 1) / threads_; }
 
-  // simulation.cpp: the step is one team run; each phase is called by every thread with its tid.
+  // simulation.cpp: the step is a sequence of phases of the team, each run once per part, with the
+  // serial work between them on the calling thread.
   void step();
-  void drift(int tid);    // half kick, drift, skin check, force reset
-  void kick(int tid);     // half kick, health check
-  bool contactForces(int tid);  // pair and wall forces added to f_, t_; false if a contact failed
-  void raiseFailure() const;    // throws BlowUp for the first failure the threads recorded
+  void drift(int part);  // half kick, drift, skin check, force reset
+  void kick(int part);   // half kick, health check
+  bool contactForces();  // pair and wall forces added to f_, t_; false if a contact failed
+  void raiseFailure() const;  // throws BlowUp for the first failure the parts recorded
   void resetFailures();
   // neighbour_lists.cpp: linked cells, the half pair list, the wall candidates (broad search)
-  void rebuildLists(int tid);
+  void rebuildLists();
   void buildCellGrid();
-  void buildRows(int tid);
-  void carryHistory(int tid);
+  void buildRows(int part);
+  void sizeNextLists();
+  void carryHistory(int part);
   void buildWallCandidates(const CellGrid& grid);
   bool meshesMovedBeyondSkin() const;
   void updateMeshBinNodes();
   // pair_forces.cpp and wall_forces.cpp: each a loop per contact model (template arguments)
-  void pairForces(int tid);
-  template <study::NormalModel N, study::RollingModel R> void pairLoop(int tid);
-  void sumPairForces(int tid);
-  void wallForces(int tid);
-  template <study::NormalModel N, study::RollingModel R> void wallLoop(int tid);
+  void pairForces(int part);
+  template <study::NormalModel N, study::RollingModel R> void pairLoop(int part);
+  void sumPairForces(int part);
+  void wallForces(int part);
+  template <study::NormalModel N, study::RollingModel R> void wallLoop(int part);
   int planeTouches(std::size_t i, WallTouch* touch, int count) const;  // fine search: appends, returns the count
   int meshTouches(std::size_t i, WallTouch* touch, int count) const;
   void matchHistory(std::size_t i, const WallTouch* touch, int count, const bool* accepted, int* matched_old) const;
@@ -283,19 +288,18 @@ class DemSimulation {
   std::vector<std::vector<double>> mesh_force_, mesh_impulse_;
   std::vector<Vec3> plane_force_;
 
-  std::vector<std::size_t> thread_window_end_;  // one past the highest particle a thread's rows reach
+  std::vector<std::size_t> part_window_end_;  // one past the highest particle a part's rows reach
   // blow-up detection filled by the force loops
   double max_overlap_ = 0;
 
-  // the team and what its threads share within a step
+  // the team and what its parts share within a step
   ThreadTeam team_;
-  std::vector<ThreadState> thread_;
+  std::vector<PartState> part_;
   CellGrid grid_;
   std::vector<std::int32_t> build_start_, build_j_;  // the list being built (rebuildLists)
   std::vector<ContactStiffness> next_stiff_;
   std::vector<double> next_hist_;
   std::vector<std::uint8_t> next_touch_;
-  bool rebuild_ = false;
 };
 
 }  // namespace demfem::builtin

@@ -1,27 +1,32 @@
-// The threads of one built-in DEM simulation (docs/builtin-dem.md, "Threads on a
-// shared machine"). One run() per step: the caller is thread 0, the others are kept from step to
-// step and sleep between runs; inside a run, barrier() waits for every thread.
+// The threads of one built-in DEM simulation (docs/builtin-dem.md, "Threads on a shared
+// machine"). A step is a sequence of phases; a phase is a fixed number of parts (the partitions of
+// the particles) that any thread of the team may run. The caller is one of the threads; the others
+// are kept from phase to phase and sleep when there is nothing to run.
 //
 // Contract
-// - run(body) calls body(tid) once on each of size() threads (tid 0 on the caller) and returns when
-//   every call has returned. The body must not throw (a throw terminates, as in an OpenMP region):
-//   the loops record failures and the caller raises them after run().
-// - barrier(): every thread of the run calls it the same number of times; none passes until all
-//   have arrived, and memory written before it is visible to every thread after it.
+// - forEachPart(body) calls body(part) exactly once for each part in [0, parts()) and returns when
+//   every call has returned; memory written by every call is then visible to the caller, and memory
+//   the caller wrote before the call is visible to every call. Which thread runs a part is not
+//   fixed: each thread claims its home part first (the same every phase, for the cache) and then
+//   any part still unclaimed, so a thread that lost its core to another process delays no one
+//   unless it holds a part, and the caller runs every part itself if the other threads never get
+//   a core. A part's result must therefore depend on the part only,
+//   never on the thread that runs it (so results are the same bit for bit whichever thread it was).
+// - The body must not throw (a throw terminates, as in an OpenMP region): the loops record
+//   failures and the caller raises them after the phase. forEachPart is called from one thread
+//   only (the team's owner), never from inside a body.
 // - Wait policy, for a machine shared with other processes: a waiting thread spins for at most
-//   kSpin (10 microseconds), then sleeps in the kernel until woken. A thread that lost its core
-//   therefore costs the others one short spin, not its whole time slice, and a waiting thread
-//   gives its core to whoever can use it (its own partner first of all).
+//   200 microseconds, or 10 once a thread of the team has been preempted lately (the machine is
+//   busy), then sleeps in the kernel until woken, giving its core to whoever can use it.
 // - Copying a team makes a new team of the same size (a simulation's copy gets its own threads).
 #pragma once
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
-#include <mutex>
 #include <cstdint>
 #include <functional>
-#include <memory>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -31,48 +36,51 @@
 
 namespace demfem::builtin {
 
+// Involuntary context switches of the calling thread so far (0 where the system does not say).
+long involuntaryContextSwitches();
+
 class ThreadTeam {
  public:
-  explicit ThreadTeam(int threads) : size_(threads < 1 ? 1 : threads) { start(); }
-  ThreadTeam(const ThreadTeam& other) : size_(other.size_) { start(); }
+  // `threads` threads sharing `parts` parts per phase (each at least 1).
+  ThreadTeam(int threads, int parts) : size_(threads < 1 ? 1 : threads), parts_(parts < 1 ? 1 : parts) { start(); }
+  ThreadTeam(const ThreadTeam& other) : size_(other.size_), parts_(other.parts_) { start(); }
   ThreadTeam& operator=(const ThreadTeam& other) {
-    if (this != &other && other.size_ != size_) {
-      stop();
-      size_ = other.size_;
-      start();
-    }
+    if (this == &other) return *this;
+    stop();
+    size_ = other.size_;
+    parts_ = other.parts_;
+    start();
     return *this;
   }
   ~ThreadTeam() { stop(); }
 
   int size() const { return size_; }
+  int parts() const { return parts_; }
 
-  void run(const std::function<void(int)>& body) {
+  void forEachPart(const std::function<void(int)>& body) {
     if (size_ == 1) {
-      body(0);
+      for (int part = 0; part < parts_; ++part) body(part);
       return;
     }
     body_ = &body;
-    generation_.fetch_add(1, std::memory_order_release);
+    done_.store(0, std::memory_order_relaxed);
+    const std::uint64_t phase = phase_.load(std::memory_order_relaxed) + 1;
+    phase_.store(phase, std::memory_order_release);  // publishes body_ and done_ = 0
     wake();
-    body(0);
-    barrier();
-  }
-
-  void barrier() {
-    if (size_ == 1) return;
-    const std::uint32_t phase = phase_.load(std::memory_order_acquire);
-    if (arrived_.fetch_add(1, std::memory_order_acq_rel) + 1 == static_cast<std::uint32_t>(size_)) {
-      arrived_.store(0, std::memory_order_relaxed);
-      phase_.store(phase + 1, std::memory_order_release);
-      wake();
-      return;
-    }
-    waitWhile(phase_, phase);
+    runParts(phase, 0);
+    waitUntil([&] { return done_.load(std::memory_order_acquire) == static_cast<std::uint32_t>(parts_); }, 0);
   }
 
  private:
-  static constexpr std::chrono::microseconds kSpin{10};
+  static constexpr std::chrono::microseconds kSpinQuiet{200}, kSpinBusy{10};
+  static constexpr int kCheckEvery = 64;    // waits between two looks at the preemption count
+  static constexpr long kBusySwitches = 4;  // preemptions within them that mark the machine busy
+  static constexpr int kBusyChecks = 4;     // a busy mark lasts this many looks (a busy thread
+                                            // sleeps more and is preempted less)
+  struct alignas(64) Preemptions {  // a cache line each: every wait counts
+    long waits = 0, switches = 0;
+    int busy_left = 0;
+  };
 
   static void pause() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -82,18 +90,61 @@ class ThreadTeam {
 #endif
   }
 
-  // Spin a little, then sleep until `value` changes (a notifier stores, then calls wake()).
-  template <class T>
-  void waitWhile(const std::atomic<T>& value, T old) {
-    const auto until = std::chrono::steady_clock::now() + kSpin;
+  // Claims and runs the parts of `phase` that are left, its home part (the one thread `thread`
+  // ran last phase too, whose particles are still in its core's cache) first. A claim is one
+  // compare-and-swap of the part's last phase from phase - 1 to phase, so a thread that wakes late
+  // for a phase already finished claims nothing; and the phase a thread holds a part of cannot
+  // finish, nor its body_ be replaced, before that part is done.
+  void runParts(std::uint64_t phase, int thread) {
+    const int home = static_cast<int>(static_cast<long>(thread) * parts_ / size_);
+    for (int k = 0; k < parts_; ++k) {
+      const int part = (home + k) % parts_;
+      std::uint64_t expected = phase - 1;
+      if (!claimed_[part].compare_exchange_strong(expected, phase, std::memory_order_acq_rel)) continue;
+      (*body_)(part);
+      if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == static_cast<std::uint32_t>(parts_)) wake();
+    }
+  }
+
+  // Spin, then sleep until `ready()` (whoever makes it true stores, then calls wake()). `who` is
+  // the waiting thread (0 the caller).
+  template <class Ready>
+  void waitUntil(Ready ready, int who) {
+    notePreemptions(who);
+    const auto until = std::chrono::steady_clock::now() + spinBudget();
     for (int k = 0;; ++k) {
-      if (value.load(std::memory_order_acquire) != old) return;
+      if (ready()) return;
       pause();
       if (k % 16 == 15 && std::chrono::steady_clock::now() > until) break;
     }
     std::unique_lock<std::mutex> lock(mutex_);
-    wake_.wait(lock, [&] { return value.load(std::memory_order_acquire) != old; });
+    wake_.wait(lock, ready);
   }
+
+  // How long a waiting thread spins before it sleeps. A sleeping thread takes tens of microseconds
+  // to wake, a large part of a phase on a quiet machine (2 threads on the paper bin, 2026-12-02:
+  // 1.52-1.60x of 1 thread with a 10 microsecond spin, 1.84x with 200); on a busy one a spinning
+  // thread takes the core its partner needs (beside one busy process: 0.83x with 200, 1.02-1.10x
+  // with 10). A thread preempted at least kBusySwitches times within kCheckEvery waits marks the
+  // machine busy for kBusyChecks looks (measured: about 1 preemption per 64 waits when quiet, 12
+  // beside a busy process).
+  std::chrono::microseconds spinBudget() const {
+    for (const auto& b : busy_)
+      if (b.load(std::memory_order_relaxed)) return kSpinBusy;
+    return kSpinQuiet;
+  }
+  void notePreemptions(int who) {
+    Preemptions& p = preemptions_[static_cast<std::size_t>(who)];
+    if (++p.waits % kCheckEvery != 0) return;
+    const long now = involuntaryContextSwitches();
+    if (now - p.switches >= kBusySwitches)
+      p.busy_left = kBusyChecks;
+    else if (p.busy_left > 0)
+      --p.busy_left;
+    busy_[static_cast<std::size_t>(who)].store(p.busy_left > 0, std::memory_order_relaxed);
+    p.switches = now;
+  }
+
   void wake() {
     { std::lock_guard<std::mutex> lock(mutex_); }  // a waiter is either before its check or asleep
     wake_.notify_all();
@@ -101,16 +152,20 @@ class ThreadTeam {
 
   void start() {
     stopping_.store(false);
-    const std::uint64_t first = generation_.load();
-    for (int tid = 1; tid < size_; ++tid)
-      workers_.emplace_back([this, tid, first] {
-        std::uint64_t seen = first;
+    phase_.store(0);
+    claimed_ = std::vector<std::atomic<std::uint64_t>>(static_cast<std::size_t>(parts_));
+    busy_ = std::vector<std::atomic<bool>>(static_cast<std::size_t>(size_));
+    preemptions_.assign(static_cast<std::size_t>(size_), Preemptions{});
+    for (int w = 1; w < size_; ++w)
+      workers_.emplace_back([this, w] {
+        std::uint64_t seen = 0;
         for (;;) {
-          waitWhile(generation_, seen);
-          seen = generation_.load(std::memory_order_acquire);
+          waitUntil(
+              [&] { return stopping_.load(std::memory_order_acquire) || phase_.load(std::memory_order_acquire) != seen; },
+              w);
           if (stopping_.load(std::memory_order_acquire)) return;
-          (*body_)(tid);
-          barrier();
+          seen = phase_.load(std::memory_order_acquire);
+          runParts(seen, w);
         }
       });
   }
@@ -118,19 +173,20 @@ class ThreadTeam {
   void stop() {
     if (workers_.empty()) return;
     stopping_.store(true, std::memory_order_release);
-    generation_.fetch_add(1, std::memory_order_release);
     wake();
     for (auto& w : workers_) w.join();
     workers_.clear();
   }
 
-  int size_;
+  int size_, parts_;
   std::vector<std::thread> workers_;
   const std::function<void(int)>* body_ = nullptr;
-  std::atomic<std::uint64_t> generation_{0};
+  std::atomic<std::uint64_t> phase_{0};            // the phase being run (numbered from 1)
+  std::vector<std::atomic<std::uint64_t>> claimed_;  // per part: the last phase that claimed it
+  std::atomic<std::uint32_t> done_{0};             // parts of the current phase that have returned
+  std::vector<std::atomic<bool>> busy_;             // per thread: it was preempted lately
+  std::vector<Preemptions> preemptions_;            // per thread, its own only
   std::atomic<bool> stopping_{false};
-  std::atomic<std::uint32_t> arrived_{0};
-  std::atomic<std::uint32_t> phase_{0};
   std::mutex mutex_;
   std::condition_variable wake_;
 };
