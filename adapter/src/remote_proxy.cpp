@@ -35,13 +35,13 @@ RemoteProxy::RemoteProxy(const RemoteOptions& options, protocol::Context* contex
 
 RemoteProxy::~RemoteProxy() = default;
 
-p::ReplyBody RemoteProxy::call(p::RequestBody body) {
+p::ReplyBody RemoteProxy::call(p::RequestBody body, const std::function<void()>& meanwhile) {
   if (shut_down_) throw CouplingError(ErrorCode::BadRequest, "remote DEM backend at " + endpoint_ + " was shut down");
   const p::Request request{++seq_, std::move(body), session_};
   const std::string op = p::opName(request.body);
   p::Reply reply;
   try {
-    reply = p::decodeReply(socket_->request(p::encode(request)));
+    reply = p::decodeReply(socket_->request(p::encode(request), meanwhile));
   } catch (const p::ProtocolError& e) {
     throw CouplingError(wire::toApi(e.code()), "'" + op + "' to DEM server " + endpoint_ + ": " + e.what());
   }
@@ -78,10 +78,12 @@ void RemoteProxy::setNodePositions(const std::string& geometry, const NodeArray&
   expect<p::Ack>(call(p::SetNodePositions{geometry, xyz}), endpoint_, "set_node_positions");
 }
 
-void RemoteProxy::simulate(double duration_s) {
+void RemoteProxy::simulate(double duration_s) { simulateWhile(duration_s, {}); }
+
+void RemoteProxy::simulateWhile(double duration_s, const std::function<void()>& work) {
   if (!(duration_s >= 0) || !std::isfinite(duration_s))
     throw CouplingError(ErrorCode::BadRequest, "simulate(" + std::to_string(duration_s) + "): duration must be finite and >= 0");
-  expect<p::TimeReply>(call(p::Simulate{duration_s}), endpoint_, "simulate");
+  expect<p::TimeReply>(call(p::Simulate{duration_s}, work), endpoint_, "simulate");
 }
 
 RigidMotion RemoteProxy::rigidMotion(const std::string& geometry) {

@@ -2,6 +2,8 @@
 // concurrency and the time left.
 #include "demfem/campaign/paper_campaign.hpp"
 
+#include "demfem/adapter/forwarding_api.hpp"
+
 #include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/builtin/backend.hpp"
@@ -28,21 +30,12 @@ namespace {
 // The built-in DEM in process, its checkpoints kept in the run's checkpoint directory: the FEM
 // driver names them ("dem_STEP.ckpt") and removes the previous one there (fem/coupled_driver.hpp),
 // as a DEM server started with --checkpoint-dir does.
-class CheckpointsInDirectory final : public adapter::CouplingApi {
+class CheckpointsInDirectory final : public adapter::ForwardingApi {
  public:
-  CheckpointsInDirectory(std::unique_ptr<adapter::CouplingApi> dem, fs::path dir) : dem_(std::move(dem)), dir_(std::move(dir)) {}
-  adapter::BackendInfo info() override { return dem_->info(); }
-  std::vector<adapter::GeometryInfo> geometries() override { return dem_->geometries(); }
-  double time() override { return dem_->time(); }
-  adapter::NodeArray nodePositions(const std::string& g) override { return dem_->nodePositions(g); }
-  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode mode) override { return dem_->nodeForces(g, mode); }
-  void setNodePositions(const std::string& g, const adapter::NodeArray& xyz) override { dem_->setNodePositions(g, xyz); }
-  void simulate(double duration_s) override { dem_->simulate(duration_s); }
-  adapter::RigidMotion rigidMotion(const std::string& g) override { return dem_->rigidMotion(g); }
-  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { dem_->setRigidMotion(g, m); }
-  void checkpoint(const fs::path& file) override { dem_->checkpoint(dir_ / file.filename()); }
-  void restore(const fs::path& file) override { dem_->restore(dir_ / file.filename()); }
-  void shutdown() override { dem_->shutdown(); }
+  CheckpointsInDirectory(std::unique_ptr<adapter::CouplingApi> dem, fs::path dir)
+      : ForwardingApi(*dem), dem_(std::move(dem)), dir_(std::move(dir)) {}
+  void checkpoint(const fs::path& file) override { inner().checkpoint(dir_ / file.filename()); }
+  void restore(const fs::path& file) override { inner().restore(dir_ / file.filename()); }
 
  private:
   std::unique_ptr<adapter::CouplingApi> dem_;

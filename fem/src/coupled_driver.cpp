@@ -238,7 +238,8 @@ struct CoupledDriver::Impl {
     return x;
   }
 
-  // One cycle of Fig. 3: forces -> FEM step (Eq 9, Eq 10) -> positions -> simulate(dt_FEM).
+  // One cycle of Fig. 3: forces -> FEM step (Eq 9, Eq 10) -> positions -> simulate(dt_FEM). The
+  // step's outputs are written while the DEM advances (simulateWhile: overlapped with a remote DEM).
   void cycle(DriverState& s) {
     if (s.step == plan_.insertion_steps) dem().setRigidMotion(tool_.name, motionOfStep(s.step, s.plan_start_s));
     const auto mode = study_.coupling.force_averaging == study::ForceAveraging::Instantaneous
@@ -254,16 +255,21 @@ struct CoupledDriver::Impl {
       dem().setNodePositions(tool_.name, deformedPositions(*u));
       r = sensors_->read(*u, integrator_->reactions());
     }
-    if (study_.output.vtk_every > 0 && s.step % study_.output.vtk_every == 0) writeVtk(s, u, forces);
-    dem().simulate(dt_);
+    const bool vtk = study_.output.vtk_every > 0 && s.step % study_.output.vtk_every == 0;
+    const double vtk_time_s = vtk ? dem().time() : 0.0;
+    const std::int64_t drag_step = s.step + 1 - plan_.insertion_steps;  // of the state simulate() reaches
+    dem().simulateWhile(dt_, [&] {
+      if (vtk) writeVtk(s, vtk_time_s, u, forces);
+      if (drag_step > 0) record(s, drag_step, r, u);
+    });
     ++s.step;
     last_ = r;
-    if (s.step > plan_.insertion_steps) record(s, r, u);
   }
 
-  void record(DriverState& s, const SensorReadings& r, const Eigen::VectorXd* u) {
-    const double t = static_cast<double>(s.step - plan_.insertion_steps) * dt_;
-    if (study_.output.csv_every <= 1 || (s.step - plan_.insertion_steps) % study_.output.csv_every == 0) {
+  // The sensors of drag step `drag_step` (the state `drag_step` FEM steps after the insertion).
+  void record(DriverState& s, std::int64_t drag_step, const SensorReadings& r, const Eigen::VectorXd* u) {
+    const double t = static_cast<double>(drag_step) * dt_;
+    if (study_.output.csv_every <= 1 || drag_step % study_.output.csv_every == 0) {
       csv_->out().write(number(t) + ',' + number(tool_.motion.velocity_m_s * t * 1e3) + ',' + number(r.load_cell_N) + ',' +
                         number(r.deformation_mm) + ',' + number(r.tip_tilt_deg) + '\n');
       if (u) {
@@ -278,10 +284,10 @@ struct CoupledDriver::Impl {
 
   fs::path vtkDirectory() const { return options_.output_dir / "vtk"; }
 
-  // The tool as the DEM simulates it from now on (positions just sent), at the DEM's time, named by
-  // the FEM step that begins now: a .vtu (vtkio) with node displacement_m and the node force_N applied.
-  void writeVtk(const DriverState& s, const Eigen::VectorXd* u, const NodeArray& forces) {
-    const double t = dem().time();
+  // The tool as the DEM simulates it from now on (positions just sent), at the DEM's time `t`, named
+  // by the FEM step that begins now: a .vtu (vtkio) with node displacement_m and the node force_N
+  // applied.
+  void writeVtk(const DriverState& s, double t, const Eigen::VectorXd* u, const NodeArray& forces) {
     const auto m = motionOfStep(s.step, s.plan_start_s);
     const NodeArray local = u ? deformedPositions(*u) : received_;
     vtkio::Dataset d;

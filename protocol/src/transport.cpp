@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <regex>
 #include <stdexcept>
@@ -242,7 +243,7 @@ ClientSocket::~ClientSocket() {
   sockets_->socket.close();
 }
 
-Multipart ClientSocket::request(const Multipart& request) {
+Multipart ClientSocket::request(const Multipart& request, const std::function<void()>& meanwhile) {
   if (broken_)
     throw ProtocolError(WireError::PeerGone, "connection to " + endpoint_ + " is unusable after an earlier failure");
   std::vector<zmq::const_buffer> buffers;
@@ -252,6 +253,26 @@ Multipart ClientSocket::request(const Multipart& request) {
     broken_ = true;
     throw ProtocolError(WireError::Timeout, "could not send to " + endpoint_ + " within " + seconds + " s");
   }
+  std::exception_ptr meanwhile_error;
+  if (meanwhile) {
+    try {
+      meanwhile();
+    } catch (...) {
+      meanwhile_error = std::current_exception();
+    }
+  }
+  Multipart reply;
+  try {
+    reply = awaitReply(seconds);
+  } catch (const ProtocolError&) {
+    if (meanwhile_error) std::rethrow_exception(meanwhile_error);
+    throw;
+  }
+  if (meanwhile_error) std::rethrow_exception(meanwhile_error);
+  return reply;
+}
+
+Multipart ClientSocket::awaitReply(const std::string& seconds) {
   const auto deadline = std::chrono::steady_clock::now() + timeout_;
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());

@@ -50,14 +50,19 @@ std::vector<double> exercise(CouplingApi& api) {
   const auto motion = api.rigidMotion("tool");
   seen.push_back(motion.velocity_m_s[2]);
   NodeArray x = api.nodePositions("tool");
+  int works = 0;
   for (int step = 0; step < 5; ++step) {
     add(api.nodeForces("tool"));
     add(api.nodeForces("tool", ForceMode::Instantaneous));
     x[2] += 1e-5;
     api.setNodePositions("tool", x);
-    api.simulate(1e-3);
+    if (step % 2 == 0)
+      api.simulate(1e-3);
+    else
+      api.simulateWhile(1e-3, [&] { ++works; });  // the client's work overlapped with the interval
     seen.push_back(api.time());
   }
+  seen.push_back(works);
   add(api.nodePositions("tool"));
   return seen;
 }

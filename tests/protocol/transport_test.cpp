@@ -4,9 +4,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <thread>
 
 using namespace demfem::protocol;
@@ -42,6 +44,41 @@ TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]"
     thread.join();
   }
   fs::remove_all(dir);
+}
+
+// The server answers only after the client's work has run, so the work cannot have waited for the
+// reply; a throwing work is rethrown after the reply, and the socket serves the next request.
+TEST_CASE("a request's meanwhile work runs before its reply is awaited, and its exception leaves the socket in step",
+          "[protocol]") {
+  demfem::protocol::Context context;
+  ServerSocket server(context, "inproc://meanwhile-test");
+  std::atomic<bool> work_done{false};
+  std::atomic<int> answered_after_work{0};
+  std::thread thread([&] {
+    for (int i = 0; i < 3; ++i) {
+      auto request = server.receive(5s);
+      if (!request) return;
+      const auto give_up = std::chrono::steady_clock::now() + 5s;
+      while (!work_done.load() && std::chrono::steady_clock::now() < give_up) std::this_thread::sleep_for(1ms);
+      if (work_done.load()) ++answered_after_work;
+      server.send(request->from, request->message);
+    }
+  });
+  ClientSocket client(context, server.endpoint(), 10s);
+  const Multipart first{"first"};
+  CHECK(client.request(first, [&] { work_done = true; }) == first);
+  work_done = false;
+  CHECK_THROWS_WITH(client.request({"second"},
+                                   [&] {
+                                     work_done = true;
+                                     throw std::runtime_error("disk full");
+                                   }),
+                    "disk full");
+  work_done = true;
+  const Multipart third{"third"};
+  CHECK(client.request(third) == third);  // the second reply was consumed: the third gets its own
+  thread.join();
+  CHECK(answered_after_work.load() == 3);
 }
 
 TEST_CASE("a client whose server never answers times out with a message saying the peer is gone", "[protocol]") {

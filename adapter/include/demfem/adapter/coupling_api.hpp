@@ -37,6 +37,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -133,6 +134,15 @@ class CouplingApi {
   virtual void setNodePositions(const std::string& geometry, const NodeArray& xyz) = 0;
   // Advances the DEM by `duration_s` (many DEM steps).
   virtual void simulate(double duration_s) = 0;
+  // simulate(duration_s), with the client's `work` (which must not call this object) done while the
+  // DEM advances where the backend runs elsewhere (the remote proxy sends the request, calls `work`,
+  // then waits for the reply), else before. Same pre/post as simulate(). An exception from `work`
+  // propagates and the backend stays usable; whether the interval was simulated is then not
+  // specified (the remote proxy has, and received the reply first). A backend need not override it.
+  virtual void simulateWhile(double duration_s, const std::function<void()>& work) {
+    work();
+    simulate(duration_s);
+  }
 
   // --- what a real client needs besides ---
   virtual RigidMotion rigidMotion(const std::string& geometry) = 0;

@@ -26,6 +26,7 @@ class ForwardingApi : public CouplingApi {
   NodeArray nodeForces(const std::string& geometry, ForceMode mode) override { return inner_.nodeForces(geometry, mode); }
   void setNodePositions(const std::string& geometry, const NodeArray& xyz) override { inner_.setNodePositions(geometry, xyz); }
   void simulate(double duration_s) override { inner_.simulate(duration_s); }
+  void simulateWhile(double duration_s, const std::function<void()>& work) override { inner_.simulateWhile(duration_s, work); }
   RigidMotion rigidMotion(const std::string& geometry) override { return inner_.rigidMotion(geometry); }
   void setRigidMotion(const std::string& geometry, const RigidMotion& motion) override { inner_.setRigidMotion(geometry, motion); }
   void checkpoint(const std::filesystem::path& file) override { inner_.checkpoint(file); }

@@ -46,6 +46,7 @@ class RemoteProxy final : public CouplingApi {
   NodeArray nodeForces(const std::string& geometry, ForceMode mode = ForceMode::IntervalMean) override;
   void setNodePositions(const std::string& geometry, const NodeArray& xyz) override;
   void simulate(double duration_s) override;
+  void simulateWhile(double duration_s, const std::function<void()>& work) override;
   RigidMotion rigidMotion(const std::string& geometry) override;
   void setRigidMotion(const std::string& geometry, const RigidMotion& motion) override;
   void checkpoint(const std::filesystem::path& file) override;
@@ -53,7 +54,7 @@ class RemoteProxy final : public CouplingApi {
   void shutdown() override;
 
  private:
-  protocol::ReplyBody call(protocol::RequestBody body);
+  protocol::ReplyBody call(protocol::RequestBody body, const std::function<void()>& meanwhile = {});
 
   std::unique_ptr<protocol::Context> own_context_;
   std::unique_ptr<protocol::ClientSocket> socket_;

@@ -28,6 +28,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -126,11 +127,17 @@ class ClientSocket {
   ClientSocket(const ClientSocket&) = delete;
   ClientSocket& operator=(const ClientSocket&) = delete;
 
-  // Sends `request` and waits for the reply (see the timeout contract above).
-  Multipart request(const Multipart& request);
+  // Sends `request` and waits for the reply (see the timeout contract above). With `meanwhile`,
+  // calls it once the request is sent and before waiting, so the caller's own work overlaps the
+  // peer's; the timeout counts from its return. An exception from `meanwhile` is rethrown after the
+  // reply has arrived (the socket stays in step with its peer) or, if the wait fails, in place of
+  // the wait's error.
+  Multipart request(const Multipart& request, const std::function<void()>& meanwhile = {});
   const std::string& endpoint() const { return endpoint_; }
 
  private:
+  Multipart awaitReply(const std::string& seconds);  // `seconds`: the timeout, for the messages
+
   struct Sockets;
   std::unique_ptr<Sockets> sockets_;
   std::string endpoint_;
