@@ -1,8 +1,15 @@
 // Share of the FEM client in a coupled run (fem/coupled_driver.hpp) on a study's bin with the built-in
-// DEM in-process: the time spent inside the DEM's coupling calls against the rest (FEM step,
-// sensors, outputs), for the full and the modal integration (study fem.integration; --integrations
-// picks them), in interleaved rounds (full, modal, full, modal, ...) on the same settled soil. Wall and processor time of the
-// calling thread; the DEM runs on the study's dem.threads. Prints a table; --json writes the same.
+// DEM: the time spent inside the DEM's coupling calls against the rest (FEM step, sensors, outputs,
+// and with a remote DEM the protocol), for the full and the modal integration (study
+// fem.integration; --integrations picks them) and the DEM in the client's process or served over
+// ipc:// from a thread of its own as demfem-dem serves it (--placements), in interleaved rounds on
+// the same settled soil. The DEM's time is measured where it runs (the server's thread when
+// remote), so a client's work overlapped with the DEM's interval (simulateWhile) costs the run
+// nothing. Wall time, and processor time of the client's and the DEM's calling threads; the DEM
+// runs on the study's dem.threads. Prints a table; --json writes the same.
+#include "demfem/adapter/forwarding_api.hpp"
+#include "demfem/adapter/remote_proxy.hpp"
+#include "demfem/adapter/server.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/fem/coupled_driver.hpp"
@@ -14,7 +21,9 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
+#include <thread>
 #include <unistd.h>
 
 namespace {
@@ -34,8 +43,8 @@ struct Clocks {
   double wall_s = 0, cpu_s = 0;
 };
 
-class TimedDem : public adapter::CouplingApi {
-  // Adds the wall and thread processor time of its lifetime to `inside`.
+// Adds the wall and thread processor time of every call to `inside`.
+class TimedDem final : public adapter::ForwardingApi {
   struct Scope {
     explicit Scope(Clocks& c) : clocks(c) {}
     ~Scope() {
@@ -48,21 +57,25 @@ class TimedDem : public adapter::CouplingApi {
   };
 
  public:
-  explicit TimedDem(std::unique_ptr<adapter::CouplingApi> inner) : inner_(std::move(inner)) {}
+  explicit TimedDem(std::unique_ptr<adapter::CouplingApi> inner) : ForwardingApi(*inner), inner_(std::move(inner)) {}
   Clocks inside;
 
-  adapter::BackendInfo info() override { Scope s(inside); return inner_->info(); }
-  std::vector<adapter::GeometryInfo> geometries() override { Scope s(inside); return inner_->geometries(); }
-  double time() override { Scope s(inside); return inner_->time(); }
-  adapter::NodeArray nodePositions(const std::string& g) override { Scope s(inside); return inner_->nodePositions(g); }
-  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { Scope s(inside); return inner_->nodeForces(g, m); }
-  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { Scope s(inside); inner_->setNodePositions(g, x); }
-  void simulate(double d) override { Scope s(inside); inner_->simulate(d); }
-  adapter::RigidMotion rigidMotion(const std::string& g) override { Scope s(inside); return inner_->rigidMotion(g); }
-  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { Scope s(inside); inner_->setRigidMotion(g, m); }
-  void checkpoint(const fs::path& f) override { Scope s(inside); inner_->checkpoint(f); }
-  void restore(const fs::path& f) override { Scope s(inside); inner_->restore(f); }
-  void shutdown() override { inner_->shutdown(); }
+  adapter::BackendInfo info() override { Scope s(inside); return inner().info(); }
+  std::vector<adapter::GeometryInfo> geometries() override { Scope s(inside); return inner().geometries(); }
+  double time() override { Scope s(inside); return inner().time(); }
+  adapter::NodeArray nodePositions(const std::string& g) override { Scope s(inside); return inner().nodePositions(g); }
+  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { Scope s(inside); return inner().nodeForces(g, m); }
+  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { Scope s(inside); inner().setNodePositions(g, x); }
+  void simulate(double d) override { Scope s(inside); inner().simulate(d); }
+  // In process the client's work runs on this thread before the interval: it is not the DEM's.
+  void simulateWhile(double d, const std::function<void()>& work) override {
+    work();
+    simulate(d);
+  }
+  adapter::RigidMotion rigidMotion(const std::string& g) override { Scope s(inside); return inner().rigidMotion(g); }
+  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { Scope s(inside); inner().setRigidMotion(g, m); }
+  void checkpoint(const fs::path& f) override { Scope s(inside); inner().checkpoint(f); }
+  void restore(const fs::path& f) override { Scope s(inside); inner().restore(f); }
 
  private:
   std::unique_ptr<adapter::CouplingApi> inner_;
@@ -72,11 +85,51 @@ struct RunCost {
   std::int64_t steps = 0;
   double reduction_s = 0;           // the driver's construction (Eq 11-15 and the integrator set-up)
   Clocks total, dem;
+  double fem_cpu_s = 0;             // the client's processor time outside the DEM's calls
   double femWallShare() const { return (total.wall_s - dem.wall_s) / total.wall_s; }
-  double femCpuShare() const { return (total.cpu_s - dem.cpu_s) / total.cpu_s; }
+  double femCpuShare() const { return fem_cpu_s / (fem_cpu_s + dem.cpu_s); }
 };
 
-RunCost coupledRun(const study::Study& study, const fs::path& out, std::optional<std::int64_t> steps) {
+enum class Placement { InProcess, Remote };
+
+std::string placementName(Placement p) {
+  switch (p) {
+    case Placement::InProcess: return "in-process";
+    case Placement::Remote: return "remote";
+  }
+  return {};
+}
+
+// The driver against `dem` served over ipc:// from a thread of this process (as demfem-dem serves it).
+std::int64_t runRemote(fem::CoupledDriver& driver, adapter::CouplingApi& dem, const fs::path& out) {
+  fs::create_directories(out);
+  protocol::Context context;
+  protocol::ServerSocket socket(context, "ipc://" + (out / "dem.ipc").string());
+  adapter::Server server(dem);
+  std::thread serving([&] {
+    try {
+      server.serve(socket, std::chrono::seconds(60));
+    } catch (const adapter::CouplingError& e) {
+      std::fprintf(stderr, "DEM server: %s\n", e.what());
+    }
+  });
+  std::int64_t steps = 0;
+  try {
+    adapter::RemoteOptions remote;
+    remote.endpoint = socket.endpoint();
+    remote.client_name = "demfem-bench-coupled";
+    adapter::RemoteProxy proxy(remote, &context);
+    steps = driver.run(proxy).steps;
+    proxy.shutdown();
+  } catch (...) {
+    serving.join();
+    throw;
+  }
+  serving.join();
+  return steps;
+}
+
+RunCost coupledRun(const study::Study& study, const fs::path& out, std::optional<std::int64_t> steps, Placement placement) {
   fem::CoupledRunOptions options;
   options.output_dir = out;
   options.max_steps = steps;
@@ -87,9 +140,16 @@ RunCost coupledRun(const study::Study& study, const fs::path& out, std::optional
   TimedDem dem(builtin::makeBackend(study));  // the settled soil: deposited by the first run, read after
   t0 = Clock::now();
   const double c0 = threadCpuSeconds();
-  cost.steps = driver.run(dem).steps;
+  switch (placement) {
+    case Placement::InProcess: cost.steps = driver.run(dem).steps; break;
+    case Placement::Remote: cost.steps = runRemote(driver, dem, out); break;
+  }
   cost.total = {std::chrono::duration<double>(Clock::now() - t0).count(), threadCpuSeconds() - c0};
-  cost.dem = dem.inside;
+  cost.dem = dem.inside;  // on the server's thread when remote, this thread in process
+  switch (placement) {
+    case Placement::InProcess: cost.fem_cpu_s = cost.total.cpu_s - cost.dem.cpu_s; break;
+    case Placement::Remote: cost.fem_cpu_s = cost.total.cpu_s; break;
+  }
   return cost;
 }
 
@@ -111,35 +171,47 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"demfem-bench-coupled: share of the FEM client in a coupled run on the built-in DEM, full against modal integration"};
+  CLI::App app{"demfem-bench-coupled: share of the FEM client in a coupled run on the built-in DEM, full against modal integration, DEM in process or remote"};
   app.name("demfem-bench-coupled");
   std::string study_file = std::string(DEMFEM_SOURCE_DIR) + "/studies/quick.json";
   int rounds = 1;
   std::int64_t steps = 0;
   app.add_option("--study", study_file, "coupled study")->check(CLI::ExistingFile)->capture_default_str();
-  app.add_option("--rounds", rounds, "interleaved rounds (one run of each --integrations value)")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--rounds", rounds, "interleaved rounds (one run of each variant)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--steps", steps, "FEM steps per run (0: the whole plan)")->check(CLI::NonNegativeNumber);
   std::vector<std::string> kinds{"full", "modal"};
   app.add_option("--integrations", kinds, "study fem.integration values timed in each round, in this order")
       ->check(CLI::IsMember({"full", "modal"}))
       ->capture_default_str();
+  std::vector<Placement> placements{Placement::InProcess, Placement::Remote};
+  app.add_option("--placements", placements, "where the DEM runs: in the client's process, or remote (served over ipc:// as demfem-dem serves it)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, Placement>{{"in-process", Placement::InProcess}, {"remote", Placement::Remote}}))
+      ->capture_default_str();
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
     const fs::path scratch = fs::temp_directory_path() / ("demfem-bench-coupled-" + std::to_string(getpid()));
     const std::optional<std::int64_t> max_steps = steps > 0 ? std::optional<std::int64_t>(steps) : std::nullopt;
-    std::vector<std::vector<RunCost>> costs(kinds.size());
+    struct Variant {
+      std::string integration;
+      Placement placement;
+      std::vector<RunCost> costs;
+    };
+    std::vector<Variant> variants;
+    for (const auto& k : kinds)
+      for (const auto p : placements) variants.push_back({k, p, {}});
     for (int r = 0; r < rounds; ++r)
-      for (std::size_t k = 0; k < kinds.size(); ++k) {
-        std::fprintf(stderr, "round %d of %d: %s integration\n", r + 1, rounds, kinds[k].c_str());
-        costs[k].push_back(coupledRun(withIntegration(study_file, kinds[k]), scratch / kinds[k], max_steps));
+      for (auto& v : variants) {
+        std::fprintf(stderr, "round %d of %d: %s integration, DEM %s\n", r + 1, rounds, v.integration.c_str(),
+                     placementName(v.placement).c_str());
+        v.costs.push_back(coupledRun(withIntegration(study_file, v.integration), scratch / v.integration, max_steps, v.placement));
       }
     fs::remove_all(scratch);
     nlohmann::json rows = nlohmann::json::array();
-    std::printf("%-8s %8s %14s %14s %14s %14s %14s\n", "FEM", "steps", "set-up (s)", "DEM/step (ms)", "FEM/step (ms)", "FEM wall (%)",
-                "FEM cpu (%)");
-    for (std::size_t k = 0; k < kinds.size(); ++k) {
+    std::printf("%-8s %-10s %8s %14s %14s %14s %14s %14s\n", "FEM", "DEM", "steps", "set-up (s)", "DEM/step (ms)", "FEM/step (ms)",
+                "FEM wall (%)", "FEM cpu (%)");
+    for (const auto& v : variants) {
       std::vector<double> setup, dem_ms, fem_ms, wall_share, cpu_share;
-      for (const RunCost& c : costs[k]) {
+      for (const RunCost& c : v.costs) {
         const auto n = static_cast<double>(c.steps);
         setup.push_back(c.reduction_s);
         dem_ms.push_back(1e3 * c.dem.wall_s / n);
@@ -147,11 +219,13 @@ int main(int argc, char** argv) {
         wall_share.push_back(100 * c.femWallShare());
         cpu_share.push_back(100 * c.femCpuShare());
       }
-      const auto& name = kinds[k];
-      std::printf("%-8s %8lld %14.2f %14.3f %14.4f %14.2f %14.2f\n", name.c_str(), static_cast<long long>(costs[k].front().steps),
-                  median(setup), median(dem_ms), median(fem_ms), median(wall_share), median(cpu_share));
-      rows.push_back({{"integration", name},
-                      {"steps", costs[k].front().steps},
+      const std::string placement = placementName(v.placement);
+      std::printf("%-8s %-10s %8lld %14.2f %14.3f %14.4f %14.2f %14.2f\n", v.integration.c_str(), placement.c_str(),
+                  static_cast<long long>(v.costs.front().steps), median(setup), median(dem_ms), median(fem_ms), median(wall_share),
+                  median(cpu_share));
+      rows.push_back({{"integration", v.integration},
+                      {"dem", placement},
+                      {"steps", v.costs.front().steps},
                       {"setup_s", median(setup)},
                       {"dem_per_step_ms", median(dem_ms)},
                       {"fem_per_step_ms", median(fem_ms)},
