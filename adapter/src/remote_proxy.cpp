@@ -31,6 +31,7 @@ RemoteProxy::RemoteProxy(const RemoteOptions& options, protocol::Context* contex
                                                         std::to_string(p::kProtocolVersion));
   info_ = {hello.backend, hello.backend_version, hello.protocol_version, hello.dem_time_step_s, hello.soil_json};
   session_ = hello.session;
+  server_advances_ = hello.advance;
 }
 
 RemoteProxy::~RemoteProxy() = default;
@@ -78,12 +79,32 @@ void RemoteProxy::setNodePositions(const std::string& geometry, const NodeArray&
   expect<p::Ack>(call(p::SetNodePositions{geometry, xyz}), endpoint_, "set_node_positions");
 }
 
-void RemoteProxy::simulate(double duration_s) { simulateWhile(duration_s, {}); }
+namespace {
 
-void RemoteProxy::simulateWhile(double duration_s, const std::function<void()>& work) {
+void checkDuration(double duration_s) {
   if (!(duration_s >= 0) || !std::isfinite(duration_s))
     throw CouplingError(ErrorCode::BadRequest, "simulate(" + std::to_string(duration_s) + "): duration must be finite and >= 0");
+}
+
+}  // namespace
+
+void RemoteProxy::simulate(double duration_s) {
+  checkDuration(duration_s);
+  expect<p::TimeReply>(call(p::Simulate{duration_s}), endpoint_, "simulate");
+}
+
+NodeArray RemoteProxy::advance(const std::string& geometry, const NodeArray& xyz, double duration_s, ForceMode mode,
+                               const std::function<void()>& work) {
+  checkDuration(duration_s);
+  if (xyz.size() % 3 != 0)
+    throw CouplingError(ErrorCode::SizeMismatch, "advance('" + geometry + "'): array size " + std::to_string(xyz.size()) +
+                                                     " is not n x 3");
+  if (server_advances_)
+    return expect<p::AdvanceReply>(call(p::Advance{geometry, xyz, duration_s, wire::toWire(mode)}, work), endpoint_, "advance")
+        .forces;
+  if (!xyz.empty()) setNodePositions(geometry, xyz);
   expect<p::TimeReply>(call(p::Simulate{duration_s}, work), endpoint_, "simulate");
+  return nodeForces(geometry, mode);
 }
 
 RigidMotion RemoteProxy::rigidMotion(const std::string& geometry) {

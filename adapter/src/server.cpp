@@ -70,6 +70,7 @@ p::ReplyBody Server::hello(const p::PeerAddress& from, const p::Request& request
   p::HelloReply reply{p::kProtocolVersion, info.backend, info.version, info.dem_time_step_s,
                       session_->token,      options_.max_simulate_s};
   reply.soil_json = info.soil_json;
+  reply.advance = true;
   return reply;
 }
 
@@ -94,6 +95,14 @@ std::filesystem::path Server::checkpointPath(const std::string& name) const {
   return options_.checkpoint_dir / name;
 }
 
+void Server::checkDuration(double duration_s) const {
+  if (!(duration_s <= options_.max_simulate_s))
+    throw CouplingError(ErrorCode::BadRequest,
+                        "simulate duration " + std::to_string(duration_s) + " s exceeds this server's limit of " +
+                            std::to_string(options_.max_simulate_s) +
+                            " s per call (demfem-dem --max-simulate-s, study coupling.max_simulate_s)");
+}
+
 p::ReplyBody Server::serveCall(const p::Request& request) {
   return std::visit(
       Overloaded{
@@ -115,13 +124,14 @@ p::ReplyBody Server::serveCall(const p::Request& request) {
             return p::Ack{};
           },
           [&](const p::Simulate& r) -> p::ReplyBody {
-            if (!(r.duration_s <= options_.max_simulate_s))
-              throw CouplingError(ErrorCode::BadRequest,
-                                  "simulate duration " + std::to_string(r.duration_s) + " s exceeds this server's limit of " +
-                                      std::to_string(options_.max_simulate_s) +
-                                      " s per call (demfem-dem --max-simulate-s, study coupling.max_simulate_s)");
+            checkDuration(r.duration_s);
             api_.simulate(r.duration_s);
             return p::TimeReply{api_.time()};
+          },
+          [&](const p::Advance& r) -> p::ReplyBody {
+            checkDuration(r.duration_s);
+            NodeArray forces = api_.advance(r.geometry, r.xyz, r.duration_s, wire::toApi(r.mode), {});
+            return p::AdvanceReply{api_.time(), r.geometry, std::move(forces)};
           },
           [&](const p::GetRigidMotion& r) -> p::ReplyBody {
             return p::RigidMotionReply{wire::toWire(api_.rigidMotion(r.geometry))};

@@ -4,8 +4,8 @@
 // fem.integration; --integrations picks them) and the DEM in the client's process or served over
 // ipc:// from a thread of its own as demfem-dem serves it (--placements), in interleaved rounds on
 // the same settled soil. The DEM's time is measured where it runs (the server's thread when
-// remote), so a client's work overlapped with the DEM's interval (simulateWhile) costs the run
-// nothing. Wall time, and processor time of the client's and the DEM's calling threads; the DEM
+// remote), so a client's work overlapped with the DEM's interval (CouplingApi::advance) costs the
+// run nothing. Wall time, and processor time of the client's and the DEM's calling threads; the DEM
 // runs on the study's dem.threads. Prints a table; --json writes the same.
 #include "demfem/adapter/forwarding_api.hpp"
 #include "demfem/adapter/remote_proxy.hpp"
@@ -68,9 +68,11 @@ class TimedDem final : public adapter::ForwardingApi {
   void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { Scope s(inside); inner().setNodePositions(g, x); }
   void simulate(double d) override { Scope s(inside); inner().simulate(d); }
   // In process the client's work runs on this thread before the interval: it is not the DEM's.
-  void simulateWhile(double d, const std::function<void()>& work) override {
-    work();
-    simulate(d);
+  adapter::NodeArray advance(const std::string& g, const adapter::NodeArray& x, double d, adapter::ForceMode m,
+                             const std::function<void()>& work) override {
+    if (work) work();
+    Scope s(inside);
+    return inner().advance(g, x, d, m, {});
   }
   adapter::RigidMotion rigidMotion(const std::string& g) override { Scope s(inside); return inner().rigidMotion(g); }
   void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { Scope s(inside); inner().setRigidMotion(g, m); }

@@ -138,6 +138,7 @@ struct CoupledDriver::Impl {
       if (options_.resume) state = restoreCheckpoint();
       openOutputs(state);
       if (!options_.resume) start(state);
+      forces_ = dem().nodeForces(tool_.name, forceMode());  // of the last interval: the first cycle's load
       const std::int64_t first_step = state.step;
       while (state.step < run_steps_) {
         if (options_.stop_requested && options_.stop_requested())
@@ -238,30 +239,34 @@ struct CoupledDriver::Impl {
     return x;
   }
 
-  // One cycle of Fig. 3: forces -> FEM step (Eq 9, Eq 10) -> positions -> simulate(dt_FEM). The
-  // step's outputs are written while the DEM advances (simulateWhile: overlapped with a remote DEM).
+  adapter::ForceMode forceMode() const {
+    return study_.coupling.force_averaging == study::ForceAveraging::Instantaneous ? adapter::ForceMode::Instantaneous
+                                                                                   : adapter::ForceMode::IntervalMean;
+  }
+
+  // One cycle of Fig. 3: forces -> FEM step (Eq 9, Eq 10) -> positions -> simulate(dt_FEM) -> the
+  // interval's forces, the last three in one exchange (advance), with the step's outputs written
+  // meanwhile (overlapped with a remote DEM's interval).
   void cycle(DriverState& s) {
     if (s.step == plan_.insertion_steps) dem().setRigidMotion(tool_.name, motionOfStep(s.step, s.plan_start_s));
-    const auto mode = study_.coupling.force_averaging == study::ForceAveraging::Instantaneous
-                          ? adapter::ForceMode::Instantaneous
-                          : adapter::ForceMode::IntervalMean;
-    const NodeArray forces = dem().nodeForces(tool_.name, mode);
     SensorReadings r;
     const Eigen::VectorXd* u = nullptr;
+    NodeArray positions;  // empty: a rigid tool's nodes stay where they are
     if (rigid_) {
-      r.load_cell_N = load_cell_influence_.dot(toFem(forces));
+      r.load_cell_N = load_cell_influence_.dot(toFem(forces_));
     } else {
-      u = &integrator_->step(toFem(forces));               // Eq (9), reactions by Eq (10)
-      dem().setNodePositions(tool_.name, deformedPositions(*u));
+      u = &integrator_->step(toFem(forces_));  // Eq (9), reactions by Eq (10)
+      positions = deformedPositions(*u);
       r = sensors_->read(*u, integrator_->reactions());
     }
     const bool vtk = study_.output.vtk_every > 0 && s.step % study_.output.vtk_every == 0;
     const double vtk_time_s = vtk ? dem().time() : 0.0;
-    const std::int64_t drag_step = s.step + 1 - plan_.insertion_steps;  // of the state simulate() reaches
-    dem().simulateWhile(dt_, [&] {
-      if (vtk) writeVtk(s, vtk_time_s, u, forces);
+    const std::int64_t drag_step = s.step + 1 - plan_.insertion_steps;  // of the state the interval reaches
+    NodeArray next = dem().advance(tool_.name, positions, dt_, forceMode(), [&] {
+      if (vtk) writeVtk(s, vtk_time_s, u, forces_);
       if (drag_step > 0) record(s, drag_step, r, u);
     });
+    forces_ = std::move(next);
     ++s.step;
     last_ = r;
   }
@@ -454,6 +459,7 @@ struct CoupledDriver::Impl {
   Eigen::VectorXd load_cell_influence_;  // rigid tool: load_cell_N = c . f (model order)
   std::int64_t last_checkpoint_step_ = -1;
   SensorReadings last_;
+  NodeArray forces_;  // the particles' forces on the tool over the last DEM interval (DEM node order)
   std::unique_ptr<StagedFile> csv_, displacements_;
   std::unique_ptr<adapter::VtkSeries> vtk_series_;
 };

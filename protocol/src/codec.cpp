@@ -27,6 +27,7 @@ template <> struct OpTag<GetNodePositions> { static constexpr const char* name =
 template <> struct OpTag<GetNodeForces> { static constexpr const char* name = "get_node_forces"; };
 template <> struct OpTag<SetNodePositions> { static constexpr const char* name = "set_node_positions"; };
 template <> struct OpTag<Simulate> { static constexpr const char* name = "simulate"; };
+template <> struct OpTag<Advance> { static constexpr const char* name = "advance"; };
 template <> struct OpTag<GetRigidMotion> { static constexpr const char* name = "get_rigid_motion"; };
 template <> struct OpTag<SetRigidMotion> { static constexpr const char* name = "set_rigid_motion"; };
 template <> struct OpTag<Checkpoint> { static constexpr const char* name = "checkpoint"; };
@@ -160,9 +161,24 @@ void encodeBody(const Hello& r, json& h, Multipart&) {
 void encodeBody(const ListGeometries&, json&, Multipart&) {}
 void encodeBody(const GetTime&, json&, Multipart&) {}
 void encodeBody(const GetNodePositions& r, json& h, Multipart&) { h["geometry"] = r.geometry; }
+const char* modeName(ForceMode mode) { return mode == ForceMode::IntervalMean ? "interval_mean" : "instantaneous"; }
+
+ForceMode modeField(const json& h) {
+  const std::string mode = stringField(h, "mode");
+  if (mode != "interval_mean" && mode != "instantaneous")
+    bad("header field 'mode' must be \"interval_mean\" or \"instantaneous\", got \"" + mode + "\"");
+  return mode == "interval_mean" ? ForceMode::IntervalMean : ForceMode::Instantaneous;
+}
+
+double durationField(const json& h) {
+  const double d = numberField(h, "duration_s");
+  if (!(d >= 0) || !std::isfinite(d)) bad("header field 'duration_s' must be finite and >= 0");
+  return d;
+}
+
 void encodeBody(const GetNodeForces& r, json& h, Multipart&) {
   h["geometry"] = r.geometry;
-  h["mode"] = r.mode == ForceMode::IntervalMean ? "interval_mean" : "instantaneous";
+  h["mode"] = modeName(r.mode);
 }
 void encodeBody(const SetNodePositions& r, json& h, Multipart& m) {
   h["geometry"] = r.geometry;
@@ -170,6 +186,13 @@ void encodeBody(const SetNodePositions& r, json& h, Multipart& m) {
   m.push_back(arrayFrame(r.xyz.data(), r.xyz.size()));
 }
 void encodeBody(const Simulate& r, json& h, Multipart&) { h["duration_s"] = r.duration_s; }
+void encodeBody(const Advance& r, json& h, Multipart& m) {
+  h["geometry"] = r.geometry;
+  h["n"] = xyzCount(r.xyz, "advance");
+  h["duration_s"] = r.duration_s;
+  h["mode"] = modeName(r.mode);
+  m.push_back(arrayFrame(r.xyz.data(), r.xyz.size()));
+}
 void encodeBody(const GetRigidMotion& r, json& h, Multipart&) { h["geometry"] = r.geometry; }
 void encodeBody(const SetRigidMotion& r, json& h, Multipart& m) {
   h["geometry"] = r.geometry;
@@ -201,24 +224,17 @@ RequestBody decodeBody(const std::string& op, const json& h, const Multipart& m)
   if (op == "list_geometries") return noFrames(), ListGeometries{};
   if (op == "get_time") return noFrames(), GetTime{};
   if (op == "get_node_positions") return noFrames(), GetNodePositions{stringField(h, "geometry")};
-  if (op == "get_node_forces") {
-    noFrames();
-    const std::string mode = stringField(h, "mode");
-    if (mode != "interval_mean" && mode != "instantaneous")
-      bad("header field 'mode' must be \"interval_mean\" or \"instantaneous\", got \"" + mode + "\"");
-    return GetNodeForces{stringField(h, "geometry"),
-                         mode == "interval_mean" ? ForceMode::IntervalMean : ForceMode::Instantaneous};
-  }
+  if (op == "get_node_forces") return noFrames(), GetNodeForces{stringField(h, "geometry"), modeField(h)};
   if (op == "set_node_positions") {
     expectFrames(m, 2, op);
     const std::size_t n = countField(h, "n", 3, sizeof(double));
     return SetNodePositions{stringField(h, "geometry"), floats(m[1], 3 * n, "set_node_positions xyz")};
   }
-  if (op == "simulate") {
-    noFrames();
-    const double d = numberField(h, "duration_s");
-    if (!(d >= 0) || !std::isfinite(d)) bad("header field 'duration_s' must be finite and >= 0");
-    return Simulate{d};
+  if (op == "simulate") return noFrames(), Simulate{durationField(h)};
+  if (op == "advance") {
+    expectFrames(m, 2, op);
+    const std::size_t n = countField(h, "n", 3, sizeof(double));
+    return Advance{stringField(h, "geometry"), floats(m[1], 3 * n, "advance xyz"), durationField(h), modeField(h)};
   }
   if (op == "get_rigid_motion") return noFrames(), GetRigidMotion{stringField(h, "geometry")};
   if (op == "set_rigid_motion") {
@@ -232,12 +248,13 @@ RequestBody decodeBody(const std::string& op, const json& h, const Multipart& m)
 }
 
 // ---- replies ----
-enum class ReplyKind { Hello, Geometries, Time, NodeArray, RigidMotion, Ack };
+enum class ReplyKind { Hello, Geometries, Time, Advance, NodeArray, RigidMotion, Ack };
 
 ReplyKind replyKindFor(const std::string& op) {
   if (op == "hello") return ReplyKind::Hello;
   if (op == "list_geometries") return ReplyKind::Geometries;
   if (op == "get_time" || op == "simulate") return ReplyKind::Time;
+  if (op == "advance") return ReplyKind::Advance;
   if (op == "get_node_positions" || op == "get_node_forces") return ReplyKind::NodeArray;
   if (op == "get_rigid_motion") return ReplyKind::RigidMotion;
   if (op == "set_node_positions" || op == "set_rigid_motion" || op == "checkpoint" || op == "restore" ||
@@ -249,6 +266,7 @@ ReplyKind replyKindFor(const std::string& op) {
 constexpr ReplyKind kindOf(const HelloReply&) { return ReplyKind::Hello; }
 constexpr ReplyKind kindOf(const GeometriesReply&) { return ReplyKind::Geometries; }
 constexpr ReplyKind kindOf(const TimeReply&) { return ReplyKind::Time; }
+constexpr ReplyKind kindOf(const AdvanceReply&) { return ReplyKind::Advance; }
 constexpr ReplyKind kindOf(const NodeArrayReply&) { return ReplyKind::NodeArray; }
 constexpr ReplyKind kindOf(const RigidMotionReply&) { return ReplyKind::RigidMotion; }
 constexpr ReplyKind kindOf(const Ack&) { return ReplyKind::Ack; }
@@ -265,6 +283,7 @@ void encodeBody(const HelloReply& r, json& h, Multipart&) {
   }
   if (!r.session.empty()) h["session"] = r.session;
   if (r.max_simulate_s > 0) h["max_simulate_s"] = r.max_simulate_s;
+  if (r.advance) h["advance"] = true;
 }
 void encodeBody(const GeometriesReply& r, json& h, Multipart& m) {
   json list = json::array();
@@ -275,6 +294,12 @@ void encodeBody(const GeometriesReply& r, json& h, Multipart& m) {
   h["geometries"] = std::move(list);
 }
 void encodeBody(const TimeReply& r, json& h, Multipart&) { h["time_s"] = r.time_s; }
+void encodeBody(const AdvanceReply& r, json& h, Multipart& m) {
+  h["time_s"] = r.time_s;
+  h["geometry"] = r.geometry;
+  h["n"] = xyzCount(r.forces, "advance reply");
+  m.push_back(arrayFrame(r.forces.data(), r.forces.size()));
+}
 void encodeBody(const NodeArrayReply& r, json& h, Multipart& m) {
   h["geometry"] = r.geometry;
   h["n"] = xyzCount(r.xyz, "node array reply");
@@ -297,6 +322,10 @@ ReplyBody decodeReplyBody(const std::string& op, const json& h, const Multipart&
       HelloReply reply{int32Field(h, "protocol_version"), stringField(h, "backend"),
                        stringField(h, "backend_version"), dt, optionalString(h, "session"), max_simulate};
       reply.soil_json = std::move(soil);
+      if (h.contains("advance")) {
+        if (!h["advance"].is_boolean()) bad("header field 'advance' must be a boolean");
+        reply.advance = h["advance"].get<bool>();
+      }
       return reply;
     }
     case ReplyKind::Geometries: {
@@ -328,6 +357,11 @@ ReplyBody decodeReplyBody(const std::string& op, const json& h, const Multipart&
     case ReplyKind::Time:
       expectFrames(m, 1, op);
       return TimeReply{numberField(h, "time_s")};
+    case ReplyKind::Advance: {
+      expectFrames(m, 2, op);
+      const std::size_t n = countField(h, "n", 3, sizeof(double));
+      return AdvanceReply{numberField(h, "time_s"), stringField(h, "geometry"), floats(m[1], 3 * n, op + " reply")};
+    }
     case ReplyKind::NodeArray: {
       expectFrames(m, 2, op);
       const std::size_t n = countField(h, "n", 3, sizeof(double));

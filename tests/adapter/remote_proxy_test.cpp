@@ -55,13 +55,15 @@ std::vector<double> exercise(CouplingApi& api) {
     add(api.nodeForces("tool"));
     add(api.nodeForces("tool", ForceMode::Instantaneous));
     x[2] += 1e-5;
-    api.setNodePositions("tool", x);
-    if (step % 2 == 0)
+    if (step % 2 == 0) {
+      api.setNodePositions("tool", x);
       api.simulate(1e-3);
-    else
-      api.simulateWhile(1e-3, [&] { ++works; });  // the client's work overlapped with the interval
+    } else {  // the same in one exchange, the client's work overlapped with the interval
+      add(api.advance("tool", x, 1e-3, ForceMode::IntervalMean, [&] { ++works; }));
+    }
     seen.push_back(api.time());
   }
+  add(api.advance("tool", {}, 1e-3, ForceMode::Instantaneous, {}));  // a rigid tool: positions kept
   seen.push_back(works);
   add(api.nodePositions("tool"));
   return seen;

@@ -130,6 +130,9 @@ TEST_CASE("server: simulate beyond the stated limit is refused and nothing is si
     CHECK(errorCode(r) == p::WireError::BadRequest);
     CHECK_THAT(errorText(r), Catch::Contains("limit"));
   }
+  const p::Reply advance = ask(server, {seq++, p::Advance{"tool", {}, 0.6, p::ForceMode::IntervalMean}, token});
+  CHECK(errorCode(advance) == p::WireError::BadRequest);
+  CHECK_THAT(errorText(advance), Catch::Contains("limit"));
   CHECK(api->time() == 0.0);
   const p::Reply ok = ask(server, {seq++, p::Simulate{0.5}, token});
   REQUIRE(std::holds_alternative<p::TimeReply>(ok.body));
@@ -266,8 +269,11 @@ TEST_CASE("server: backend errors come back as error replies with the API's code
   CHECK(errorCode(ask(server, {2, p::GetNodeForces{"plough", p::ForceMode::IntervalMean}, token})) ==
         p::WireError::UnknownGeometry);
   CHECK(errorCode(ask(server, {3, p::SetNodePositions{"tool", {0, 0, 0}}, token})) == p::WireError::SizeMismatch);
+  CHECK(errorCode(ask(server, {4, p::Advance{"tool", {0, 0, 0}, 1e-4, p::ForceMode::IntervalMean}, token})) ==
+        p::WireError::SizeMismatch);
+  CHECK(api->time() == 0.0);  // the advance stopped at its positions
   // A failed request does not advance the session: the next one is served normally.
-  CHECK(std::holds_alternative<p::NodeArrayReply>(ask(server, {4, p::GetNodePositions{"tool"}, token}).body));
+  CHECK(std::holds_alternative<p::NodeArrayReply>(ask(server, {5, p::GetNodePositions{"tool"}, token}).body));
 }
 
 TEST_CASE("server fuzz: 1e5 random and mutated requests from two connections always get a decodable reply",
@@ -278,7 +284,8 @@ TEST_CASE("server fuzz: 1e5 random and mutated requests from two connections alw
   const std::vector<p::Request> seeds{
       {2, p::GetNodeForces{"tool", p::ForceMode::IntervalMean}, token}, {3, p::Simulate{1e-4}, token},
       {4, p::SetNodePositions{"tool", api->nodePositions("tool")}, token}, {5, p::GetRigidMotion{"tool"}, token},
-      {6, p::SetRigidMotion{"tool", {}}, token}, {7, p::ListGeometries{}, token}, {8, p::Hello{1, "again"}}};
+      {6, p::SetRigidMotion{"tool", {}}, token}, {7, p::ListGeometries{}, token}, {8, p::Hello{1, "again"}},
+      {9, p::Advance{"tool", api->nodePositions("tool"), 1e-4, p::ForceMode::Instantaneous}, token}};
   std::vector<p::Multipart> wire;
   for (const auto& s : seeds) wire.push_back(p::encode(s));
   p::fuzz::Mutator mutator(99);

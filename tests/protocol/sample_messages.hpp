@@ -26,6 +26,8 @@ inline std::vector<Request> requests() {
       {14, Shutdown{}},
       {~0ull, GetNodePositions{"unicode \xc3\xa9 name"}},
       {15, GetTime{}, "0123456789abcdef0123456789abcdef"},
+      {16, Advance{"tool", xyz, 1e-3, ForceMode::IntervalMean}},
+      {17, Advance{"tool", {}, 0.0, ForceMode::Instantaneous}},
   };
 }
 
@@ -38,6 +40,11 @@ inline std::vector<Reply> replies() {
          r.soil_json = R"({"particles":1455,"settled":true})";
          return r;
        }()},
+      {1, "hello", [] {
+         HelloReply r{kProtocolVersion, "builtin", "0.1", 9e-5};
+         r.advance = true;
+         return r;
+       }()},
       {12, "checkpoint", ErrorReply{WireError::Busy, "busy: this server is serving another client"}},
       {2, "list_geometries",
        GeometriesReply{{{"tool", 4, {{0, 1, 2}, {0, 2, 3}}}, {"empty", 0, {}}}}},
@@ -45,6 +52,8 @@ inline std::vector<Reply> replies() {
       {8, "simulate", TimeReply{1e-3}},
       {4, "get_node_positions", NodeArrayReply{"tool", {0, 0.1, 0.2, 0.3, 0.4, 0.5}}},
       {5, "get_node_forces", NodeArrayReply{"tool", {-1.5, 2.25, 1e-20}}},
+      {16, "advance", AdvanceReply{2.5e-3, "tool", {-1.5, 2.25, 1e-20, 0, 0, 3}}},
+      {17, "advance", AdvanceReply{0, "tool", {}}},
       {10, "get_rigid_motion", RigidMotionReply{{{1, 2, 3}, {4, 5, 6}, 7}}},
       {7, "set_node_positions", Ack{}},
       {14, "shutdown", Ack{}},

@@ -134,14 +134,19 @@ class CouplingApi {
   virtual void setNodePositions(const std::string& geometry, const NodeArray& xyz) = 0;
   // Advances the DEM by `duration_s` (many DEM steps).
   virtual void simulate(double duration_s) = 0;
-  // simulate(duration_s), with the client's `work` (which must not call this object) done while the
-  // DEM advances where the backend runs elsewhere (the remote proxy sends the request, calls `work`,
-  // then waits for the reply), else before. Same pre/post as simulate(). An exception from `work`
-  // propagates and the backend stays usable; whether the interval was simulated is then not
-  // specified (the remote proxy has, and received the reply first). A backend need not override it.
-  virtual void simulateWhile(double duration_s, const std::function<void()>& work) {
-    work();
+  // One coupling cycle's exchange (Fig. 3): setNodePositions(geometry, xyz) unless `xyz` is empty
+  // (a rigid tool), simulate(duration_s), and nodeForces(geometry, mode) of that interval returned;
+  // the client's `work` (its outputs of the step; it must not call this object) is done meanwhile
+  // where the DEM runs elsewhere. The remote proxy makes it one round trip: it sends the request,
+  // runs `work`, then waits for the reply. Same pre/post and errors as the three calls. An
+  // exception from `work` propagates and the backend stays usable; whether the interval was then
+  // simulated is not specified. A backend need not override it.
+  virtual NodeArray advance(const std::string& geometry, const NodeArray& xyz, double duration_s, ForceMode mode,
+                            const std::function<void()>& work) {
+    if (work) work();
+    if (!xyz.empty()) setNodePositions(geometry, xyz);
     simulate(duration_s);
+    return nodeForces(geometry, mode);
   }
 
   // --- what a real client needs besides ---

@@ -14,6 +14,8 @@
 //   not a path: the server keeps its checkpoints in its own directory. A path is refused here
 //   (BadRequest) before anything is sent.
 // - Every request after the handshake carries the session token of the hello reply.
+// - advance() is one `advance` request when the server's hello reply offers it, else
+//   set_node_positions, simulate (with the client's work done while it runs) and get_node_forces.
 #pragma once
 
 #include "demfem/adapter/coupling_api.hpp"
@@ -46,7 +48,8 @@ class RemoteProxy final : public CouplingApi {
   NodeArray nodeForces(const std::string& geometry, ForceMode mode = ForceMode::IntervalMean) override;
   void setNodePositions(const std::string& geometry, const NodeArray& xyz) override;
   void simulate(double duration_s) override;
-  void simulateWhile(double duration_s, const std::function<void()>& work) override;
+  NodeArray advance(const std::string& geometry, const NodeArray& xyz, double duration_s, ForceMode mode,
+                    const std::function<void()>& work) override;
   RigidMotion rigidMotion(const std::string& geometry) override;
   void setRigidMotion(const std::string& geometry, const RigidMotion& motion) override;
   void checkpoint(const std::filesystem::path& file) override;
@@ -62,6 +65,7 @@ class RemoteProxy final : public CouplingApi {
   std::uint64_t seq_ = 0;
   std::string session_;
   BackendInfo info_;
+  bool server_advances_ = false;  // the hello reply said the server answers `advance`
   bool shut_down_ = false;
 };
 

@@ -15,7 +15,7 @@
 //   ServerOptions::idle_timeout the session ends and any connection may say hello.
 // - "shutdown" calls the backend's shutdown() and ends the session; every later request gets an
 //   error (the backend is gone).
-// - simulate: a duration above ServerOptions::max_simulate_s is refused (BadRequest) before the
+// - simulate and advance: a duration above ServerOptions::max_simulate_s is refused (BadRequest) before the
 //   backend sees it; the hello reply states the limit.
 // - checkpoint/restore carry a checkpoint NAME (protocol::isCheckpointName), resolved in
 //   ServerOptions::checkpoint_dir; without a directory both are refused (Unsupported). A failed
@@ -78,6 +78,7 @@ class Server {
   protocol::ReplyBody hello(const protocol::PeerAddress& from, const protocol::Request& request, Clock::time_point now);
   void checkOwner(const protocol::PeerAddress& from, const protocol::Request& request, Clock::time_point now);
   protocol::ReplyBody serveCall(const protocol::Request& request);
+  void checkDuration(double duration_s) const;  // throws BadRequest above max_simulate_s
   std::filesystem::path checkpointPath(const std::string& name) const;
   bool endIdleSession(Clock::time_point now);  // true if it ended one
   void log(const std::string& text) const;

@@ -85,6 +85,15 @@ struct Simulate {
   double duration_s = 0;  // >= 0
   bool operator==(const Simulate&) const = default;
 };
+// One coupling cycle in one round trip: set_node_positions (unless xyz is empty: a rigid tool),
+// simulate, get_node_forces of the interval.
+struct Advance {
+  std::string geometry;
+  std::vector<double> xyz;  // n x 3, m; empty: positions unchanged
+  double duration_s = 0;    // >= 0
+  ForceMode mode = ForceMode::IntervalMean;
+  bool operator==(const Advance&) const = default;
+};
 struct GetRigidMotion {
   std::string geometry;
   bool operator==(const GetRigidMotion&) const = default;
@@ -107,7 +116,7 @@ struct Restore {
 struct Shutdown { bool operator==(const Shutdown&) const = default; };
 
 using RequestBody = std::variant<Hello, ListGeometries, GetTime, GetNodePositions, GetNodeForces,
-                                 SetNodePositions, Simulate, GetRigidMotion, SetRigidMotion,
+                                 SetNodePositions, Simulate, Advance, GetRigidMotion, SetRigidMotion,
                                  Checkpoint, Restore, Shutdown>;
 
 struct Request {
@@ -135,6 +144,9 @@ struct HelloReply {
   // Optional header field "soil": a JSON object describing the settled soil the DEM started from
   // (figures of its deposition); kept here as that object's JSON text, "" when absent.
   std::string soil_json;
+  // Optional header field "advance": true when the server answers `advance` (a server written
+  // before it, or without it, leaves it out and the client uses the three calls instead).
+  bool advance = false;
   bool operator==(const HelloReply&) const = default;
 };
 struct GeometryEntry {
@@ -150,6 +162,12 @@ struct GeometriesReply {
 struct TimeReply {  // answers GetTime and Simulate (the time reached)
   double time_s = 0;
   bool operator==(const TimeReply&) const = default;
+};
+struct AdvanceReply {  // answers Advance: the time reached and the interval's node forces (N)
+  double time_s = 0;
+  std::string geometry;
+  std::vector<double> forces;
+  bool operator==(const AdvanceReply&) const = default;
 };
 struct NodeArrayReply {  // answers GetNodePositions (m) and GetNodeForces (N)
   std::string geometry;
@@ -167,7 +185,7 @@ struct ErrorReply {
   bool operator==(const ErrorReply&) const = default;
 };
 
-using ReplyBody = std::variant<HelloReply, GeometriesReply, TimeReply, NodeArrayReply,
+using ReplyBody = std::variant<HelloReply, GeometriesReply, TimeReply, AdvanceReply, NodeArrayReply,
                                RigidMotionReply, Ack, ErrorReply>;
 
 struct Reply {
