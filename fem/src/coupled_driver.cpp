@@ -263,7 +263,7 @@ struct CoupledDriver::Impl {
     const double vtk_time_s = vtk ? dem().time() : 0.0;
     const std::int64_t drag_step = s.step + 1 - plan_.insertion_steps;  // of the state the interval reaches
     NodeArray next = dem().advance(tool_.name, positions, dt_, forceMode(), [&] {
-      if (vtk) writeVtk(s, vtk_time_s, u, forces_);
+      if (vtk) writeVtk(s, vtk_time_s, rigid_ ? received_ : positions, forces_);
       if (drag_step > 0) record(s, drag_step, r, u);
     });
     forces_ = std::move(next);
@@ -289,12 +289,11 @@ struct CoupledDriver::Impl {
 
   fs::path vtkDirectory() const { return options_.output_dir / "vtk"; }
 
-  // The tool as the DEM simulates it from now on (positions just sent), at the DEM's time `t`, named
-  // by the FEM step that begins now: a .vtu (vtkio) with node displacement_m and the node force_N
-  // applied.
-  void writeVtk(const DriverState& s, double t, const Eigen::VectorXd* u, const NodeArray& forces) {
+  // The tool as the DEM simulates it from now on (node positions `local` in its frame, those of this
+  // step's advance), at the DEM's time `t`, named by the FEM step that begins now: a .vtu (vtkio)
+  // with node displacement_m and the node force_N applied.
+  void writeVtk(const DriverState& s, double t, const NodeArray& local, const NodeArray& forces) {
     const auto m = motionOfStep(s.step, s.plan_start_s);
-    const NodeArray local = u ? deformedPositions(*u) : received_;
     vtkio::Dataset d;
     d.time_s = t;
     vtkio::PointArray displacement{"displacement_m", 3, {}, vtkio::ValueType::Float64};
