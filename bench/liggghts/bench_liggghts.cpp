@@ -8,7 +8,10 @@
 // - --coupled: the study as it is (contact laws included), run coupled with the FEM client
 //   (fem::CoupledDriver) in-process on each backend, one core, per seed: mean draught and mean
 //   load-cell force over the drag phase, their mean and scatter over the seeds and the difference
-//   between the backends in standard errors.
+//   between the backends in standard errors; for a finished run (no --steps) also the paper's
+//   evaluation of its sensors (campaign/paper_report.hpp: window means and spreads of force and
+//   deformation, the power-law fit of the spectrum, the tilt range), so that a paper case
+//   (--study studies/paper/..., --stroke-mm to shorten it) is compared as its report compares it.
 // Prints a table; --json writes the same numbers.
 //
 // Every LIGGGHTS run starts this program again under `mpirun -np N` in worker mode (--worker), so that
@@ -18,6 +21,7 @@
 #include "demfem/adapter/tool_drive.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/liggghts/backend.hpp"
+#include "demfem/campaign/paper_report.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/fem/coupled_driver.hpp"
 #include "demfem/study/study.hpp"
@@ -50,6 +54,12 @@ struct RunResult {
   double draught_N = 0;  // mean force on the tool against the drag (-z), over the window
   double load_cell_N = std::numeric_limits<double>::quiet_NaN();  // coupled: mean load-cell force of the drag
   double surface_mm = std::numeric_limits<double>::quiet_NaN();  // soilSurface() of the run's soil
+  // Coupled, finished runs: the paper's evaluation of the sensors (campaign::evaluatePaperRun); NaN otherwise.
+  double window_begin_mm = std::numeric_limits<double>::quiet_NaN(), window_end_mm = window_begin_mm;
+  double force_mean_N = window_begin_mm, force_std_dev_N = window_begin_mm;
+  double deformation_mean_mm = window_begin_mm, deformation_std_dev_mm = window_begin_mm;
+  double fit_a = window_begin_mm, fit_b = window_begin_mm, fit_b_std_error = window_begin_mm;
+  double tilt_min_deg = window_begin_mm, tilt_max_deg = window_begin_mm;
   double particleStepsPerSecond() const { return static_cast<double>(particles) * static_cast<double>(steps) / wall_s; }
 };
 
@@ -57,7 +67,17 @@ nlohmann::json toJson(const RunResult& r) {
   return {{"backend", r.backend},     {"cores", r.cores},        {"seed", r.seed},
           {"particles", r.particles}, {"steps", r.steps},        {"wall_s", r.wall_s},        {"cpu_s", r.cpu_s},
           {"draught_N", r.draught_N}, {"load_cell_N", r.load_cell_N}, {"particle_steps_per_s", r.particleStepsPerSecond()},
-          {"surface_mm", r.surface_mm}};
+          {"surface_mm", r.surface_mm},
+          {"window_begin_mm", r.window_begin_mm}, {"window_end_mm", r.window_end_mm},
+          {"force_mean_N", r.force_mean_N}, {"force_std_dev_N", r.force_std_dev_N},
+          {"deformation_mean_mm", r.deformation_mean_mm}, {"deformation_std_dev_mm", r.deformation_std_dev_mm},
+          {"fit_a", r.fit_a}, {"fit_b", r.fit_b}, {"fit_b_std_error", r.fit_b_std_error},
+          {"tilt_min_deg", r.tilt_min_deg}, {"tilt_max_deg", r.tilt_max_deg}};
+}
+
+// A number of toJson(), NaN where it wrote null.
+double numberOrNaN(const nlohmann::json& j, const char* key) {
+  return j.at(key).is_null() ? std::numeric_limits<double>::quiet_NaN() : j.at(key).get<double>();
 }
 
 RunResult fromJson(const nlohmann::json& j) {
@@ -66,9 +86,15 @@ RunResult fromJson(const nlohmann::json& j) {
   r.steps = j.at("steps"), r.wall_s = j.at("wall_s");
   if (!j.at("cpu_s").is_null()) r.cpu_s = j.at("cpu_s");
   // NaN (no drag interval, no coupled run) is written as null.
-  r.draught_N = j.at("draught_N").is_null() ? std::nan("") : j.at("draught_N").get<double>();
-  if (!j.at("load_cell_N").is_null()) r.load_cell_N = j.at("load_cell_N");
-  if (!j.at("surface_mm").is_null()) r.surface_mm = j.at("surface_mm");
+  r.draught_N = numberOrNaN(j, "draught_N");
+  r.load_cell_N = numberOrNaN(j, "load_cell_N");
+  r.surface_mm = numberOrNaN(j, "surface_mm");
+  r.window_begin_mm = numberOrNaN(j, "window_begin_mm"), r.window_end_mm = numberOrNaN(j, "window_end_mm");
+  r.force_mean_N = numberOrNaN(j, "force_mean_N"), r.force_std_dev_N = numberOrNaN(j, "force_std_dev_N");
+  r.deformation_mean_mm = numberOrNaN(j, "deformation_mean_mm");
+  r.deformation_std_dev_mm = numberOrNaN(j, "deformation_std_dev_mm");
+  r.fit_a = numberOrNaN(j, "fit_a"), r.fit_b = numberOrNaN(j, "fit_b"), r.fit_b_std_error = numberOrNaN(j, "fit_b_std_error");
+  r.tilt_min_deg = numberOrNaN(j, "tilt_min_deg"), r.tilt_max_deg = numberOrNaN(j, "tilt_max_deg");
   return r;
 }
 
@@ -86,6 +112,9 @@ std::string g_deposition;
 bool g_coupled = false;
 std::int64_t g_fem_steps = 0;
 
+// Coupled mode: > 0 shortens the first tool's stroke to this (mm).
+double g_stroke_mm = 0;
+
 // Length of one simulate() call (s); 0: the study's FEM step, as a coupled run calls it. A call as
 // long as the window times the engines alone: LIGGGHTS then does its run set-up (`pre yes`) once
 // instead of once per coupling interval.
@@ -99,6 +128,7 @@ study::Study seededStudy(const std::string& file, std::uint64_t seed, int cores)
   s.soil.deposition_seed = seed;
   s.dem.threads = cores;
   if (s.tools.empty()) throw cli::InputError(file + ": the benchmark drags the study's first tool; it has none");
+  if (g_stroke_mm > 0) s.tools.front().motion.stroke_m = g_stroke_mm * 1e-3;
   return s;
 }
 
@@ -175,6 +205,16 @@ class DraughtTap final : public adapter::CouplingApi {
   long intervals_ = 0;
 };
 
+// The paper's evaluation of a finished coupled run's sensors into `r`.
+void evaluateAsPaperCase(const analysis::Recording& sensors, const study::Study& s, RunResult& r) {
+  const campaign::RunEvaluation e = campaign::evaluatePaperRun(sensors, s);
+  r.window_begin_mm = e.window_begin_mm, r.window_end_mm = e.window_end_mm;
+  r.force_mean_N = e.window.force_N.mean, r.force_std_dev_N = e.window.force_N.std_dev;
+  r.deformation_mean_mm = e.window.deformation_mm.mean, r.deformation_std_dev_mm = e.window.deformation_mm.std_dev;
+  r.fit_a = e.fit.a, r.fit_b = e.fit.b, r.fit_b_std_error = e.fit.b_std_error;
+  if (e.tilt_range_deg) r.tilt_min_deg = e.tilt_range_deg->first, r.tilt_max_deg = e.tilt_range_deg->second;
+}
+
 // The study as it is, coupled with the FEM client in this process (FEM model built first, untimed):
 // mean draught and mean load-cell force over the drag phase (or the first g_fem_steps FEM steps).
 RunResult coupledRun(const study::Study& s, const std::function<std::unique_ptr<adapter::CouplingApi>()>& make,
@@ -196,6 +236,7 @@ RunResult coupledRun(const study::Study& s, const std::function<std::unique_ptr<
   r.draught_N = tap.meanDraught_N();
   r.load_cell_N = summary.mean_force_N;
   r.surface_mm = surface_mm(s);
+  if (g_fem_steps == 0) evaluateAsPaperCase(analysis::readRecording(options.output_dir / "sensors.csv"), s, r);
   std::error_code ignored;
   std::filesystem::remove_all(options.output_dir, ignored);
   return r;
@@ -242,30 +283,42 @@ std::optional<RunResult> runLiggghts(const std::string& file, std::uint64_t seed
   return r;
 }
 
+// A command-line number that reads back to the same double.
+std::string number(double v) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.17g", v);
+  return text;
+}
+
 RunResult runLiggghtsRanks(const std::string& file, std::uint64_t seed, int ranks, double window_s) {
   const auto self = std::filesystem::read_symlink("/proc/self/exe");
   const auto result = std::filesystem::temp_directory_path() /
                       ("demfem-bench-liggghts-" + std::to_string(::getpid()) + "-" + std::to_string(seed) + ".json");
-  char window[64];
-  std::snprintf(window, sizeof window, "%.17g", window_s);
-  char settle[64];
-  std::snprintf(settle, sizeof settle, "%.17g", g_settle_kinetic_energy_J);
-  char interval[64];
-  std::snprintf(interval, sizeof interval, "%.17g", g_interval_s);
   // --oversubscribe: the ranks may outnumber the cores mpirun counts; running as root (containers)
   // needs OpenMPI's explicit consent.
   const std::string command = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") +
                               DEMFEM_MPIEXEC + " -np " + std::to_string(ranks) + " --oversubscribe '" + self.string() +
-                              "' --study '" + file + "' --worker " + std::to_string(seed) + " --window-s " + window +
-                              " --settle-kinetic-energy-J " + settle + " --interval-s " + interval +
+                              "' --study '" + file + "' --worker " + std::to_string(seed) + " --window-s " + number(window_s) +
+                              " --settle-kinetic-energy-J " + number(g_settle_kinetic_energy_J) + " --interval-s " + number(g_interval_s) +
                               (g_deposition.empty() ? "" : " --deposition " + g_deposition) +
                               (g_coupled ? " --coupled --steps " + std::to_string(g_fem_steps) : "") +
+                              (g_stroke_mm > 0 ? " --stroke-mm " + number(g_stroke_mm) : "") +
                               " --json '" + result.string() + "'";
   if (std::system(command.c_str()) != 0) throw std::runtime_error("the LIGGGHTS run under mpirun failed: " + command);
   std::ifstream in(result);
   const auto j = nlohmann::json::parse(in);
   std::filesystem::remove(result);
   return fromJson(j);
+}
+
+// The paper's evaluation of each finished coupled run, one row per run.
+void printPaperEvaluation(const std::vector<RunResult>& runs) {
+  std::printf("%-9s %5s %13s %19s %23s %17s %17s\n", "backend", "seed", "window_mm", "force_N mean+-sd",
+              "deformation_mm mean+-sd", "fit b +- se", "tilt_deg min..max");
+  for (const auto& r : runs)
+    std::printf("%-9s %5llu %6.0f-%-6.0f %9.4g +- %-7.3g %11.4g +- %-9.3g %7.3f +- %-6.3f %7.2f..%-7.2f\n", r.backend.c_str(),
+                static_cast<unsigned long long>(r.seed), r.window_begin_mm, r.window_end_mm, r.force_mean_N, r.force_std_dev_N,
+                r.deformation_mean_mm, r.deformation_std_dev_mm, r.fit_b, r.fit_b_std_error, r.tilt_min_deg, r.tilt_max_deg);
 }
 
 struct Summary {
@@ -316,6 +369,9 @@ int main(int argc, char** argv) {
   app.add_option("--steps", g_fem_steps, "--coupled: stop after this many FEM steps (insertion included; default: "
                                          "the whole study)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--stroke-mm", g_stroke_mm, "--coupled: shorten the first tool's stroke to this (mm); the paper's "
+                                             "window scales with it (campaign/paper_report.hpp)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--worker", worker_seed, "Internal: run LIGGGHTS with this seed as an MPI job and write --json");
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
@@ -347,21 +403,25 @@ int main(int argc, char** argv) {
         if (!liggghts_first) record(runLiggghtsRanks(file, seed_u, cores, window_s));
       }
 
+    if (text && g_coupled) printPaperEvaluation(runs);
     // Per backend and core count: speed, draught and load cell, mean and sample standard deviation
     // over seeds; per core count the difference of the backends against its standard error.
     nlohmann::json summary = nlohmann::json::object();
     for (int cores : core_counts) {
-      std::map<std::string, Summary> speed, draught, load_cell;
+      std::map<std::string, Summary> speed, draught, load_cell, window_force, window_deformation;
       std::vector<double> draught_diff, load_diff;  // per seed, liggghts - builtin (same soil)
       for (const std::string backend : {"builtin", "liggghts"}) {
-        std::vector<double> d, rate, lc;
+        std::vector<double> d, rate, lc, wf, wd;
         for (const auto& r : runs)
           if (r.backend == backend && r.cores == cores) {
             d.push_back(r.draught_N);
             rate.push_back(r.particleStepsPerSecond());
             lc.push_back(r.load_cell_N);
+            wf.push_back(r.force_mean_N);
+            wd.push_back(r.deformation_mean_mm);
           }
         speed[backend] = summarise(rate), draught[backend] = summarise(d), load_cell[backend] = summarise(lc);
+        window_force[backend] = summarise(wf), window_deformation[backend] = summarise(wd);
         if (text)
           std::printf("%-9s %d core(s), %d seeds: %.3e +- %.1e particle-steps/s, draught %.4f +- %.4f N, load cell "
                       "%.4f +- %.4f N\n",
@@ -372,20 +432,24 @@ int main(int argc, char** argv) {
             {"draught_mean_N", draught[backend].mean},          {"draught_stddev_N", draught[backend].stddev},
             {"load_cell_mean_N", load_cell[backend].mean},      {"load_cell_stddev_N", load_cell[backend].stddev}};
       }
-      const auto compare = [&](const char* name, std::map<std::string, Summary>& m) {
+      const auto compare = [&](const char* name, std::map<std::string, Summary>& m, const char* unit = "N") {
         const double diff = m["liggghts"].mean - m["builtin"].mean;
         const double n = static_cast<double>(seeds);
         const double se = std::sqrt((m["liggghts"].stddev * m["liggghts"].stddev + m["builtin"].stddev * m["builtin"].stddev) / n);
         const double relative = diff / (0.5 * (m["liggghts"].mean + m["builtin"].mean));
         if (text)
-          std::printf("%s, %d core(s): liggghts - builtin = %.4f N (%.1f %% of their mean), %.2f standard errors of "
+          std::printf("%s, %d core(s): liggghts - builtin = %.4g %s (%.1f %% of their mean), %.2f standard errors of "
                       "the difference (seed scatter)\n",
-                      name, cores, diff, 100 * relative, diff / se);
-        return nlohmann::json{{"difference_N", diff}, {"relative_difference", relative},
-                              {"standard_error_N", se}, {"difference_in_standard_errors", diff / se}};
+                      name, cores, diff, unit, 100 * relative, diff / se);
+        return nlohmann::json{{std::string("difference_") + unit, diff}, {"relative_difference", relative},
+                              {std::string("standard_error_") + unit, se}, {"difference_in_standard_errors", diff / se}};
       };
       nlohmann::json c{{"draught", compare("draught", draught)}};
       if (g_coupled) c["load_cell"] = compare("load cell", load_cell);
+      if (g_coupled && g_fem_steps == 0) {
+        c["window_force"] = compare("window-mean load cell", window_force);
+        c["window_deformation"] = compare("window-mean deformation", window_deformation, "mm");
+      }
       summary["liggghts_minus_builtin_" + std::to_string(cores) + "_cores"] = c;
       const double ratio = speed["liggghts"].mean / speed["builtin"].mean;
       if (text) std::printf("speed ratio liggghts / builtin on %d core(s): %.3f\n", cores, ratio);

@@ -42,14 +42,6 @@ class CheckpointsInDirectory final : public adapter::ForwardingApi {
   fs::path dir_;
 };
 
-// The study a case runs, as it is kept in its run directory (without dem.threads, which may differ
-// between an interrupted call and the one that resumes it).
-std::string studyRecord(const study::Study& s) {
-  nlohmann::ordered_json doc = study::toJson(s);
-  if (doc.contains("dem")) doc["dem"].erase("threads");
-  return doc.dump(2) + '\n';
-}
-
 std::string readText(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::stringstream s;
@@ -83,7 +75,7 @@ struct Case {
 // Claims the run directory for the study (see contract) and says whether it resumes.
 bool prepareRunDirectory(const Case& c) {
   const fs::path record = c.status.run_dir / "study.json";
-  const std::string text = studyRecord(c.study);
+  const std::string text = caseStudyRecord(c.study);
   if (fs::exists(record)) {
     if (readText(record) != text)
       throw ArgumentError(c.status.run_dir.string() + " holds a run of another study than " + c.status.study_file.string() +
@@ -249,7 +241,7 @@ std::vector<Case> loadCases(const std::vector<fs::path>& files, const CampaignOp
     c.status.run_dir = o.directory / c.status.name;
     c.status.estimate_wall_s = o.estimate_wall_s ? o.estimate_wall_s(c.study) : 0;
     if (finishedRun(c.status.run_dir)) {
-      if (readText(c.status.run_dir / "study.json") != studyRecord(c.study))
+      if (readText(c.status.run_dir / "study.json") != caseStudyRecord(c.study))
         throw ArgumentError(c.status.run_dir.string() + " holds a finished run of another study than " + file.string() +
                             "; remove that directory to run the case again");
       c.status.state = CaseState::Done;
@@ -261,6 +253,12 @@ std::vector<Case> loadCases(const std::vector<fs::path>& files, const CampaignOp
 }
 
 }  // namespace
+
+std::string caseStudyRecord(const study::Study& s) {
+  nlohmann::ordered_json doc = study::toJson(s);
+  if (doc.contains("dem")) doc["dem"].erase("threads");
+  return doc.dump(2) + '\n';
+}
 
 bool finishedRun(const fs::path& run_dir) {
   std::ifstream in(run_dir / "sensors.json");

@@ -27,9 +27,16 @@ constexpr double kPaperStrokeMm = 600;  // Section 2.9
 // Section 2.3 / Fig. 15: the statistics window; Section 3: the tilt window (mm of displacement).
 constexpr double kWindowBeginMm = 100, kWindowEndMm = 500, kTiltBeginMm = 200, kTiltEndMm = 400;
 constexpr double kFitLowHz = 1.0;
+// What a report keeps of each evaluation (see contract): the curve at one sample per
+// kCurveStepMm, the spectrum as means over kSpectrumBinsPerDecade logarithmic bins per decade.
+constexpr const char* kKeptDirectory = "paper-runs";
+constexpr double kCurveStepMm = 0.5;
+constexpr double kSpectrumBinsPerDecade = 50;
 
 struct Evaluated : RunEvaluation {
   double run_estimate_s = 0;
+  std::string label;  // the runs' label, ReportOptions::label of the report that evaluated it
+  bool kept = false;  // taken from an earlier report's kept evaluation
 };
 
 struct ReportCase {
@@ -38,6 +45,7 @@ struct ReportCase {
   const PaperCase* paper = nullptr;
   double full_estimate_s = 0;
   std::optional<Evaluated> run;
+  bool kept_stale = false;  // a kept evaluation of another version of the study was not used
 };
 
 std::string kindName(study::StudyKind kind) { return kind == study::StudyKind::DemOnly ? "DEM" : "DEM-FEM"; }
@@ -53,7 +61,173 @@ std::optional<std::pair<double, double>> rangeIn(const std::vector<double>& x, c
   return r;
 }
 
-std::vector<ReportCase> collect(const std::vector<fs::path>& files, const ReportOptions& o) {
+// The curve at one sample per kCurveStepMm of displacement (the first sample of each step).
+analysis::DisplacementCurve thinned(const analysis::DisplacementCurve& c) {
+  analysis::DisplacementCurve t;
+  double next_mm = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (c.displacement_mm[i] < next_mm) continue;
+    next_mm = c.displacement_mm[i] + kCurveStepMm;
+    t.time_s.push_back(c.time_s[i]);
+    t.displacement_mm.push_back(c.displacement_mm[i]);
+    t.force_N.push_back(c.force_N[i]);
+    t.deformation_mm.push_back(c.deformation_mm[i]);
+    if (!c.tilt_deg.empty()) t.tilt_deg.push_back(c.tilt_deg[i]);
+  }
+  return t;
+}
+
+// The spectrum from kFitLowHz up as the means (of frequency and amplitude) over logarithmic bins.
+analysis::Spectrum binned(const analysis::Spectrum& s) {
+  analysis::Spectrum b;
+  b.sample_rate_Hz = s.sample_rate_Hz, b.samples_used = s.samples_used;
+  double f_sum = 0, a_sum = 0;
+  int members = 0;
+  long bin = std::numeric_limits<long>::min();
+  auto flush = [&] {
+    if (members == 0) return;
+    b.frequency_Hz.push_back(f_sum / members);
+    b.amplitude.push_back(a_sum / members);
+    f_sum = a_sum = 0, members = 0;
+  };
+  for (std::size_t i = 0; i < s.frequency_Hz.size(); ++i) {
+    const double f = s.frequency_Hz[i];
+    if (f < kFitLowHz) continue;
+    const auto k = static_cast<long>(std::floor(std::log10(f) * kSpectrumBinsPerDecade));
+    if (k != bin) flush(), bin = k;
+    f_sum += f, a_sum += s.amplitude[i], ++members;
+  }
+  flush();
+  return b;
+}
+
+std::string studyHash(const study::Study& s) {
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(study::fnv1a64(caseStudyRecord(s))));
+  return hex;
+}
+
+// A sample of a kept curve or spectrum, to 7 significant digits (a kept file stays small and reads
+// back to the number it was written from).
+double rounded(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.7g", v);
+  return std::strtod(text, nullptr);
+}
+
+nlohmann::json roundedArray(const std::vector<double>& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (double x : v) a.push_back(rounded(x));
+  return a;
+}
+
+nlohmann::json statisticsJson(const analysis::SignalStatistics& s) {
+  return {{"mean", s.mean}, {"std_dev", s.std_dev}, {"samples", s.samples}};
+}
+
+analysis::SignalStatistics statisticsOf(const nlohmann::json& j) {
+  return {j.at("mean").get<double>(), j.at("std_dev").get<double>(), j.at("samples").get<std::size_t>()};
+}
+
+// The kept evaluation of a case (see contract).
+nlohmann::json keptJson(const ReportCase& c) {
+  const Evaluated& e = *c.run;
+  nlohmann::json window{{"force_N", statisticsJson(e.window.force_N)}, {"deformation_mm", statisticsJson(e.window.deformation_mm)}};
+  window["tilt_deg"] = e.window.tilt_deg ? statisticsJson(*e.window.tilt_deg) : nlohmann::json(nullptr);
+  return {{"case", c.name},
+          {"study_fnv1a64", studyHash(c.study)},
+          {"label", e.label},
+          {"stroke_mm", e.stroke_mm},
+          {"window_begin_mm", e.window_begin_mm},
+          {"window_end_mm", e.window_end_mm},
+          {"tilt_begin_mm", e.tilt_begin_mm},
+          {"tilt_end_mm", e.tilt_end_mm},
+          {"window", window},
+          {"tilt_range_deg", e.tilt_range_deg ? nlohmann::json{e.tilt_range_deg->first, e.tilt_range_deg->second} : nlohmann::json(nullptr)},
+          {"fit_signal", e.fit_signal},
+          {"fit",
+           {{"a", e.fit.a}, {"b", e.fit.b}, {"log10_a_std_error", e.fit.log10_a_std_error}, {"b_std_error", e.fit.b_std_error},
+            {"r_squared_log", e.fit.r_squared_log}, {"points", e.fit.points}, {"f_low_Hz", e.fit.f_low_Hz}, {"f_high_Hz", e.fit.f_high_Hz}}},
+          {"spectrum",
+           {{"frequency_Hz", roundedArray(e.spectrum.frequency_Hz)}, {"amplitude", roundedArray(e.spectrum.amplitude)},
+            {"sample_rate_Hz", e.spectrum.sample_rate_Hz}, {"samples_used", e.spectrum.samples_used}}},
+          {"curve",
+           {{"time_s", roundedArray(e.curve.time_s)}, {"displacement_mm", roundedArray(e.curve.displacement_mm)},
+            {"force_N", roundedArray(e.curve.force_N)}, {"deformation_mm", roundedArray(e.curve.deformation_mm)},
+            {"tilt_deg", roundedArray(e.curve.tilt_deg)}}},
+          {"wall_time_s", e.wall_s},
+          {"run_estimate_s", e.run_estimate_s}};
+}
+
+Evaluated evaluationOf(const nlohmann::json& j) {
+  Evaluated e;
+  e.kept = true;
+  e.label = j.at("label").get<std::string>();
+  e.stroke_mm = j.at("stroke_mm"), e.window_begin_mm = j.at("window_begin_mm"), e.window_end_mm = j.at("window_end_mm");
+  e.tilt_begin_mm = j.at("tilt_begin_mm"), e.tilt_end_mm = j.at("tilt_end_mm");
+  const nlohmann::json& w = j.at("window");
+  e.window.force_N = statisticsOf(w.at("force_N"));
+  e.window.deformation_mm = statisticsOf(w.at("deformation_mm"));
+  if (!w.at("tilt_deg").is_null()) e.window.tilt_deg = statisticsOf(w.at("tilt_deg"));
+  if (const nlohmann::json& t = j.at("tilt_range_deg"); !t.is_null()) e.tilt_range_deg = std::pair{t.at(0).get<double>(), t.at(1).get<double>()};
+  e.fit_signal = j.at("fit_signal").get<std::string>();
+  const nlohmann::json& f = j.at("fit");
+  e.fit.a = f.at("a"), e.fit.b = f.at("b"), e.fit.log10_a_std_error = f.at("log10_a_std_error"), e.fit.b_std_error = f.at("b_std_error");
+  e.fit.r_squared_log = f.at("r_squared_log"), e.fit.points = f.at("points"), e.fit.f_low_Hz = f.at("f_low_Hz"), e.fit.f_high_Hz = f.at("f_high_Hz");
+  const nlohmann::json& sp = j.at("spectrum");
+  e.spectrum.frequency_Hz = sp.at("frequency_Hz").get<std::vector<double>>();
+  e.spectrum.amplitude = sp.at("amplitude").get<std::vector<double>>();
+  e.spectrum.sample_rate_Hz = sp.at("sample_rate_Hz"), e.spectrum.samples_used = sp.at("samples_used");
+  const nlohmann::json& cv = j.at("curve");
+  e.curve.time_s = cv.at("time_s").get<std::vector<double>>();
+  e.curve.displacement_mm = cv.at("displacement_mm").get<std::vector<double>>();
+  e.curve.force_N = cv.at("force_N").get<std::vector<double>>();
+  e.curve.deformation_mm = cv.at("deformation_mm").get<std::vector<double>>();
+  e.curve.tilt_deg = cv.at("tilt_deg").get<std::vector<double>>();
+  const std::size_t n = e.curve.displacement_mm.size();
+  if (e.curve.time_s.size() != n || e.curve.force_N.size() != n || e.curve.deformation_mm.size() != n ||
+      (!e.curve.tilt_deg.empty() && e.curve.tilt_deg.size() != n) || e.spectrum.frequency_Hz.size() != e.spectrum.amplitude.size())
+    throw std::invalid_argument("/curve or /spectrum: arrays of different lengths");
+  e.wall_s = j.at("wall_time_s"), e.run_estimate_s = j.at("run_estimate_s");
+  return e;
+}
+
+// The kept evaluation of the case in `file`: nullopt without one, or when it is of another version
+// of the case's study (then c.kept_stale). Throws analysis::InputError for a damaged file.
+std::optional<Evaluated> readKept(const fs::path& file, ReportCase& c) {
+  std::ifstream in(file);
+  if (!in) return std::nullopt;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    if (j.at("case").get<std::string>() != c.name) throw std::invalid_argument("/case is '" + j.at("case").get<std::string>() + "'");
+    if (j.at("study_fnv1a64").get<std::string>() != studyHash(c.study)) {
+      c.kept_stale = true;
+      return std::nullopt;
+    }
+    return evaluationOf(j);
+  } catch (const std::exception& x) {  // nlohmann's parse and type errors name the key or byte
+    throw analysis::InputError(file.string() + ": not a kept evaluation of " + c.name + ": " + x.what());
+  }
+}
+
+// A finished run of the case in the campaign directory, evaluated; nullopt when it has none.
+std::optional<Evaluated> freshEvaluation(const ReportCase& c, const ReportOptions& o) {
+  const fs::path run_dir = o.directory / c.name;
+  if (!finishedRun(run_dir)) return std::nullopt;
+  const study::Study run_study = study::loadStudy(run_dir / "study.json");
+  if (caseStudyRecord(run_study) != caseStudyRecord(c.study))
+    throw ArgumentError(run_dir.string() + " holds a finished run of another study than the case " + c.name +
+                        "; remove that directory to run the case again");
+  Evaluated e;
+  static_cast<RunEvaluation&>(e) = evaluateCampaignRun(run_dir, run_study);
+  e.curve = thinned(e.curve);
+  e.spectrum = binned(e.spectrum);
+  e.run_estimate_s = o.estimate_wall_s(run_study);
+  e.label = o.label;
+  return e;
+}
+
+std::vector<ReportCase> collect(const std::vector<fs::path>& files, const ReportOptions& o, const fs::path& kept_dir) {
   std::vector<ReportCase> cases;
   for (const fs::path& file : files) {
     ReportCase c;
@@ -63,14 +237,8 @@ std::vector<ReportCase> collect(const std::vector<fs::path>& files, const Report
       throw ArgumentError(file.string() + ": the report's cases are coupled or dem-only soil-bin studies");
     c.paper = paperCaseOf(c.study);
     c.full_estimate_s = o.estimate_wall_s(c.study);
-    const fs::path run_dir = o.directory / c.name;
-    if (finishedRun(run_dir)) {
-      const study::Study run_study = study::loadStudy(run_dir / "study.json");
-      Evaluated e;
-      static_cast<RunEvaluation&>(e) = evaluateCampaignRun(run_dir, run_study);
-      e.run_estimate_s = o.estimate_wall_s(run_study);
-      c.run = e;
-    }
+    c.run = freshEvaluation(c, o);
+    if (!c.run) c.run = readKept(kept_dir / (c.name + ".json"), c);
     cases.push_back(std::move(c));
   }
   return cases;
@@ -129,6 +297,8 @@ const Section<Case>& caseSection() {
        {"critical_step_s", [](R c) -> CellValue { return physics::demTimeStep(c->study).critical_s; }},
        {"dem_step_why", [](R c) -> CellValue { return physics::demTimeStep(c->study).why; }},
        {"finished", [](R c) -> CellValue { return c->run.has_value(); }},
+       {"kept", [](R c) -> CellValue { return c->run && c->run->kept; }},
+       {"runs_label", [](R c) -> CellValue { return c->run ? c->run->label : std::string(); }},
        {"stroke_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::stroke_mm); }},
        {"window_begin_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::window_begin_mm); }},
        {"window_end_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::window_end_mm); }},
@@ -205,8 +375,9 @@ const std::vector<MarkdownColumn>& hoursView() {
        md::onlyIf("finished", md::concat({md::format("wall_time_s", "%.0f s"), md::literal(" ("), md::format("stroke_mm", "%.0f"), md::literal(" mm stroke)")}),
                   "not finished")},
       {"ours: full scale, projected h",
-       md::concat({md::format("projected_full_scale_h", "%.1f"), md::onlyIf("finished", md::literal(" (measured cost)"), " (estimate)")})},
-      {"ours / paper", md::format("projected_over_paper", "%.2f")}};
+       md::concat({md::format("projected_full_scale_h", "%.2g"), md::onlyIf("finished", md::literal(" (measured cost)"), " (estimate)")})},
+      {"ours / paper", md::format("projected_over_paper", "%.2g")},
+      {"runs", md::onlyIf("finished", md::concat({md::onlyIf("kept", md::literal("kept: "), "this report: "), md::text("runs_label")}), "")}};
   return view;
 }
 
@@ -326,9 +497,8 @@ const PaperCase* paperCaseOf(const study::Study& s) {
   return nullptr;
 }
 
-RunEvaluation evaluateCampaignRun(const fs::path& run_dir, const study::Study& run_study) {
+RunEvaluation evaluatePaperRun(const analysis::Recording& rec, const study::Study& run_study) {
   RunEvaluation e;
-  const analysis::Recording rec = analysis::readRecording(run_dir / "sensors.csv");
   e.stroke_mm = run_study.tools.front().motion.stroke_m * 1e3;
   const double scale = std::min(1.0, e.stroke_mm / kPaperStrokeMm);
   e.window_begin_mm = kWindowBeginMm * scale;
@@ -354,6 +524,11 @@ RunEvaluation evaluateCampaignRun(const fs::path& run_dir, const study::Study& r
   }
   e.spectrum = analysis::amplitudeSpectrum(t, signal);
   e.fit = analysis::fitPowerLaw(e.spectrum.frequency_Hz, e.spectrum.amplitude, kFitLowHz, e.spectrum.sample_rate_Hz / 2);
+  return e;
+}
+
+RunEvaluation evaluateCampaignRun(const fs::path& run_dir, const study::Study& run_study) {
+  RunEvaluation e = evaluatePaperRun(analysis::readRecording(run_dir / "sensors.csv"), run_study);
   std::ifstream record(run_dir / kRunRecord);
   if (!record) throw analysis::InputError((run_dir / kRunRecord).string() + ": missing (the run's wall time)");
   try {
@@ -366,13 +541,21 @@ RunEvaluation evaluateCampaignRun(const fs::path& run_dir, const study::Study& r
 
 nlohmann::json writePaperReport(const std::vector<fs::path>& study_files, const ReportOptions& o, analysis::StagedOutput& out) {
   if (!o.estimate_wall_s) throw ArgumentError("report: no cost estimate given");
-  const std::vector<ReportCase> cases = collect(study_files, o);
+  const std::vector<ReportCase> cases = collect(study_files, o, out.directory() / kKeptDirectory);
+  std::string stale;
+  for (const ReportCase& c : cases) {
+    if (c.kept_stale) stale += (stale.empty() ? "" : ", ") + c.name;
+    if (c.run) out.writeText(std::string(kKeptDirectory) + "/" + c.name + ".json", keptJson(c).dump(1) + '\n');
+  }
   std::ostringstream md;
   md << "# The paper at its own scale: reproduction report\n\n"
      << "Generated by `demfem campaign --report` from the campaign runs in `" << o.directory.filename().string() << "`"
      << (o.label.empty() ? std::string() : " (" + o.label + ")")
-     << "; do not edit by hand. How the cases are run, resumed and evaluated: `demfem campaign --help` and "
-        "`campaign/include/demfem/campaign/paper_report.hpp`.\n\n"
+     << " and, for a case without a finished run there, the evaluation an earlier report kept in `" << kKeptDirectory
+     << "/` (the last table's column `runs` says which, with the label of its runs); do not edit by hand. How the cases are "
+        "run, resumed and evaluated: `demfem campaign --help` and `campaign/include/demfem/campaign/paper_report.hpp`.\n\n"
+     << (stale.empty() ? std::string()
+                       : "Not used: the kept evaluations of " + stale + ", made of another version of their study.\n\n")
      << "A finished run shorter than the paper's 600 mm stroke is evaluated over the same fractions of its stroke "
         "(100-500 mm and 200-400 mm scaled by stroke / 600 mm). The paper states Fig. 15's means and Fig. 17's fits as "
         "figures only; the tables give ours.\n\n"

@@ -251,5 +251,62 @@ TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an un
                      "| s235_dem_18 | S235 | DEM | 18 | ",
                      "| not finished |  |  |",
                      "| pmma_coupled_30 | 2.00-2.10 | 2.10-2.30 | ",
-                     "| s235_dem_18 | 44 | not finished | 0.5 (estimate) | 0.01 |"});
+                     "| s235_dem_18 | 44 | not finished | 0.5 (estimate) | 0.011 |  |"});
+}
+
+TEST_CASE("the paper report keeps each evaluation: without its run a case is reported from it, as before", "[campaign][report]") {
+  TempDir dir("paper-report-kept");
+  const fs::path studies = fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper";
+  const fs::path run = dir / "campaign" / "pmma_coupled_30";
+  fs::create_directories(run);
+  fs::copy_file(studies / "pmma_coupled_30.json", run / "study.json");
+  analysis::SoilBinTruth truth;
+  truth.force_N = 25, truth.deformation_mm = 3;
+  analysis::SyntheticRecording recording = analysis::makeSoilBinRecording(truth, analysis::RecordingFormat::Calibrated);
+  recording.sidecar["complete"] = true;
+  analysis::writeSyntheticRecording(recording, run / "sensors.csv");
+  std::ofstream(run / kRunRecord) << R"({"wall_time_s": 5400})";
+  ReportOptions options;
+  options.directory = dir / "campaign";
+  options.label = "commit A";
+  options.estimate_wall_s = [](const study::Study& s) { return 1e5 * s.tools.front().motion.depth_m; };
+  const std::vector<fs::path> files{studies / "pmma_coupled_30.json", studies / "s235_dem_18.json"};
+  nlohmann::json first, second;
+  writeStaged(dir / "report", [&](analysis::StagedOutput& out) { first = writePaperReport(files, options, out); });
+  REQUIRE(fs::exists(dir / "report" / "paper-runs" / "pmma_coupled_30.json"));
+  CHECK_FALSE(fs::exists(dir / "report" / "paper-runs" / "s235_dem_18.json"));
+  const std::string csv_first = readText(dir / "report" / "paper-reproduction.csv");
+  const std::string kept_first = readText(dir / "report" / "paper-runs" / "pmma_coupled_30.json");
+
+  // Another machine: no run directory, a later label; the kept evaluation stands in for the run.
+  fs::remove_all(dir / "campaign");
+  options.label = "commit B";
+  writeStaged(dir / "report", [&](analysis::StagedOutput& out) { second = writePaperReport(files, options, out); });
+  const nlohmann::json& pmma = second["cases"][0];
+  CHECK(pmma["finished"] == true);
+  CHECK(pmma["kept"] == true);
+  CHECK(pmma["runs_label"] == "commit A");
+  for (const char* key : {"force_mean_N", "force_std_N", "deformation_mean_mm", "fit_b", "tilt_min_deg", "wall_time_s", "projected_full_scale_h"})
+    CHECK(pmma[key] == first["cases"][0][key]);
+  CHECK(readText(dir / "report" / "paper-runs" / "pmma_coupled_30.json") == kept_first);
+  CHECK(first["cases"][0]["kept"] == false);
+  checkContains(readText(dir / "report" / "paper-reproduction.md"), {"kept: commit A |"});
+  // The CSV differs only in the two provenance columns.
+  CHECK(csv_first != readText(dir / "report" / "paper-reproduction.csv"));
+
+  SECTION("a kept evaluation of another version of the study is not used, and the report says so") {
+    nlohmann::json kept = nlohmann::json::parse(kept_first);
+    kept["study_fnv1a64"] = "0000000000000000";
+    std::ofstream(dir / "report" / "paper-runs" / "pmma_coupled_30.json") << kept.dump();
+    nlohmann::json third;
+    writeStaged(dir / "report", [&](analysis::StagedOutput& out) { third = writePaperReport(files, options, out); });
+    CHECK(third["cases"][0]["finished"] == false);
+    checkContains(readText(dir / "report" / "paper-reproduction.md"), {"Not used: the kept evaluations of pmma_coupled_30"});
+  }
+  SECTION("a damaged kept evaluation is an error naming the file") {
+    std::ofstream(dir / "report" / "paper-runs" / "pmma_coupled_30.json") << R"({"case": "pmma_coupled_30"})";
+    analysis::StagedOutput out(dir / "report");
+    CHECK_THROWS_WITH(writePaperReport(files, options, out),
+                      Catch::Matchers::Contains("pmma_coupled_30.json: not a kept evaluation of pmma_coupled_30"));
+  }
 }

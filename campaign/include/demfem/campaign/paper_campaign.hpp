@@ -95,6 +95,10 @@ CampaignSummary runCampaign(const std::vector<std::filesystem::path>& study_file
 
 nlohmann::json toJson(const CampaignSummary& summary);
 
+// The text of a case's study as its run directory keeps it (study.json): the study without
+// dem.threads, which may differ between an interrupted call and the one that resumes it.
+std::string caseStudyRecord(const study::Study& study);
+
 // A run directory whose sensors.json says "complete": true (a damaged one is not finished).
 bool finishedRun(const std::filesystem::path& run_dir);
 

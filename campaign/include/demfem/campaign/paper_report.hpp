@@ -9,7 +9,16 @@
 // - A case of the report is a study file; it is matched to the paper's case by its first tool's
 //   name ("S235", "PMMA"), its kind and its depth. Its run is the campaign run directory
 //   `directory / stem` (campaign/paper_campaign.hpp); a finished run (sensors.json complete) is
-//   evaluated, any other is listed with its estimated cost only.
+//   evaluated (a finished run of another study than the case's file is an ArgumentError).
+// - Kept evaluations: every evaluated case is also written to `paper-runs/<case>.json` of the
+//   output (its numbers, the curve at one sample per 0.5 mm, the spectrum as means over 50
+//   logarithmic bins per decade from 1 Hz, its wall time and estimate, the label of its runs and
+//   the FNV-1a 64 of its study record, caseStudyRecord()). A case without a finished run takes the
+//   evaluation kept in the output directory by an earlier report, if it is of the same study record
+//   (else the report lists it as not used), so that a report stays whole when only some cases are
+//   rerun, on another machine. Plots always show the kept form, so a report from kept evaluations
+//   equals the one from the runs. A damaged kept file is an analysis::InputError naming it; a case
+//   with neither is listed with its estimated cost only.
 // - Evaluation of a finished run (analysis/evaluation.hpp, spectrum.hpp): the run's sensors.csv as
 //   a calibrated recording; window statistics over the paper's 100-500 mm, scaled by stroke / 600 mm
 //   for a shortened stroke (the same fractions of the stroke); the tilt's range (min, max) over
@@ -74,12 +83,16 @@ struct RunEvaluation {
   double wall_s = 0;
 };
 
+// The evaluation of a finished run's sensors (its sensors.csv read as a recording) of `run_study`
+// (see contract); wall_s is left 0. Throws analysis::InputError.
+RunEvaluation evaluatePaperRun(const analysis::Recording& sensors, const study::Study& run_study);
+
 // Pre: `run_dir` holds a finished run of `run_study`. Throws analysis::InputError.
 RunEvaluation evaluateCampaignRun(const std::filesystem::path& run_dir, const study::Study& run_study);
 
 struct ReportOptions {
   std::filesystem::path directory = "campaign";  // the campaign's run directories
-  std::string label;                              // e.g. the source revision the runs came from
+  std::string label;                              // the source revision the runs came from (kept with each evaluation)
   std::function<double(const study::Study&)> estimate_wall_s;  // required
   const analysis::GnuplotRenderer* renderer = nullptr;         // no plots without
   std::optional<ConvergenceSummary> convergence;               // the "Time step" section's table
