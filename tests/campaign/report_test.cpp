@@ -204,23 +204,37 @@ TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, unfitted cau
                      "| 40 mm | -37.5 | - | 0.02 | 0.8 | -1.1 / -0.9 |"});
 }
 
-TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an unfinished case has null run figures", "[campaign][report]") {
-  TempDir dir("paper-report");
-  const fs::path studies = fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper";
-  // A finished run of the PMMA 30 mm case: a synthetic calibrated recording (window means known).
-  const fs::path run = dir / "campaign" / "pmma_coupled_30";
+namespace {
+
+// A finished campaign run of the PMMA 30 mm case: a synthetic calibrated recording (window means
+// 25 N and 3 mm), 5400 s of wall time.
+void writeFinishedPmma30Run(const fs::path& campaign_dir) {
+  const fs::path run = campaign_dir / "pmma_coupled_30";
   fs::create_directories(run);
-  fs::copy_file(studies / "pmma_coupled_30.json", run / "study.json");
+  fs::copy_file(fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper" / "pmma_coupled_30.json", run / "study.json");
   analysis::SoilBinTruth truth;
   truth.force_N = 25, truth.deformation_mm = 3;
   analysis::SyntheticRecording recording = analysis::makeSoilBinRecording(truth, analysis::RecordingFormat::Calibrated);
   recording.sidecar["complete"] = true;
   analysis::writeSyntheticRecording(recording, run / "sensors.csv");
   std::ofstream(run / kRunRecord) << R"({"wall_time_s": 5400})";
+}
 
+// Report options over `campaign_dir` with an estimate of 1e5 s per metre of depth.
+ReportOptions paperReportOptions(const fs::path& campaign_dir) {
   ReportOptions options;
-  options.directory = dir / "campaign";
+  options.directory = campaign_dir;
   options.estimate_wall_s = [](const study::Study& s) { return 1e5 * s.tools.front().motion.depth_m; };
+  return options;
+}
+
+}  // namespace
+
+TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an unfinished case has null run figures", "[campaign][report]") {
+  TempDir dir("paper-report");
+  const fs::path studies = fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper";
+  writeFinishedPmma30Run(dir / "campaign");
+  const ReportOptions options = paperReportOptions(dir / "campaign");
   nlohmann::json doc;
   writeStaged(dir / "report", [&](analysis::StagedOutput& out) {
     doc = writePaperReport({studies / "pmma_coupled_30.json", studies / "s235_dem_18.json"}, options, out);
@@ -257,19 +271,9 @@ TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an un
 TEST_CASE("the paper report keeps each evaluation: without its run a case is reported from it, as before", "[campaign][report]") {
   TempDir dir("paper-report-kept");
   const fs::path studies = fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper";
-  const fs::path run = dir / "campaign" / "pmma_coupled_30";
-  fs::create_directories(run);
-  fs::copy_file(studies / "pmma_coupled_30.json", run / "study.json");
-  analysis::SoilBinTruth truth;
-  truth.force_N = 25, truth.deformation_mm = 3;
-  analysis::SyntheticRecording recording = analysis::makeSoilBinRecording(truth, analysis::RecordingFormat::Calibrated);
-  recording.sidecar["complete"] = true;
-  analysis::writeSyntheticRecording(recording, run / "sensors.csv");
-  std::ofstream(run / kRunRecord) << R"({"wall_time_s": 5400})";
-  ReportOptions options;
-  options.directory = dir / "campaign";
+  writeFinishedPmma30Run(dir / "campaign");
+  ReportOptions options = paperReportOptions(dir / "campaign");
   options.label = "commit A";
-  options.estimate_wall_s = [](const study::Study& s) { return 1e5 * s.tools.front().motion.depth_m; };
   const std::vector<fs::path> files{studies / "pmma_coupled_30.json", studies / "s235_dem_18.json"};
   nlohmann::json first, second;
   writeStaged(dir / "report", [&](analysis::StagedOutput& out) { first = writePaperReport(files, options, out); });
