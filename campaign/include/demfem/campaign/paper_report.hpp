@@ -29,7 +29,8 @@
 // - Time step: with `convergence` (the bench's JSON, campaign/paper_convergence.hpp) its table and
 //   verdict, after the explanation of the step the cases run at.
 // - Output: `paper-reproduction.md`, its table `paper-reproduction.csv` (one row per case: the
-//   case, its tool, model, depth and velocities, DEM step, the run's stroke, window, window means
+//   case, its tool, model, depth and velocities, DEM step, whether its evaluation is a kept one
+//   and the label of its runs, the run's stroke, window, window means
 //   and spreads, spectral fit, tilt range beside the paper's, wall time and the full-scale
 //   projection beside Table 1's hours; a case not finished has its run's figures empty) and, with a
 //   renderer, plots/paper_force_curves.svg, plots/paper_deformation_curves.svg and
