@@ -144,6 +144,7 @@ nlohmann::json keptJson(const ReportCase& c) {
           {"tilt_end_mm", e.tilt_end_mm},
           {"window", window},
           {"tilt_range_deg", e.tilt_range_deg ? nlohmann::json{e.tilt_range_deg->first, e.tilt_range_deg->second} : nlohmann::json(nullptr)},
+          {"tilt_window_deg", e.tilt_window_deg ? statisticsJson(*e.tilt_window_deg) : nlohmann::json(nullptr)},
           {"fit_signal", e.fit_signal},
           {"fit",
            {{"a", e.fit.a}, {"b", e.fit.b}, {"log10_a_std_error", e.fit.log10_a_std_error}, {"b_std_error", e.fit.b_std_error},
@@ -170,6 +171,7 @@ Evaluated evaluationOf(const nlohmann::json& j) {
   e.window.deformation_mm = statisticsOf(w.at("deformation_mm"));
   if (!w.at("tilt_deg").is_null()) e.window.tilt_deg = statisticsOf(w.at("tilt_deg"));
   if (const nlohmann::json& t = j.at("tilt_range_deg"); !t.is_null()) e.tilt_range_deg = std::pair{t.at(0).get<double>(), t.at(1).get<double>()};
+  if (const nlohmann::json& t = j.at("tilt_window_deg"); !t.is_null()) e.tilt_window_deg = statisticsOf(t);
   e.fit_signal = j.at("fit_signal").get<std::string>();
   const nlohmann::json& f = j.at("fit");
   e.fit.a = f.at("a"), e.fit.b = f.at("b"), e.fit.log10_a_std_error = f.at("log10_a_std_error"), e.fit.b_std_error = f.at("b_std_error");
@@ -268,12 +270,16 @@ double projectedSeconds(Case c) {
   return c->run && c->run->run_estimate_s > 0 ? c->full_estimate_s * c->run->wall_s / c->run->run_estimate_s : c->full_estimate_s;
 }
 
-// Our tilt range's midpoint minus the paper's simulated one's.
+// Our mean tilt over the tilt window minus the midpoint of the paper's simulated range.
 CellValue tiltAgainstPaper(Case c) {
-  const auto ours = runTilt(c);
-  if (!ours || !c->paper || !c->paper->simulated_tilt_deg) return std::nullopt;
+  if (!c->run || !c->run->tilt_window_deg || !c->paper || !c->paper->simulated_tilt_deg) return std::nullopt;
   const auto& p = *c->paper->simulated_tilt_deg;
-  return std::optional<double>((ours->first + ours->second) / 2 - (p.first + p.second) / 2);
+  return std::optional<double>(c->run->tilt_window_deg->mean - (p.first + p.second) / 2);
+}
+
+// A statistic of our tilt over the tilt window.
+CellValue tiltStatistic(Case c, double analysis::SignalStatistics::*field) {
+  return c->run && c->run->tilt_window_deg ? std::optional<double>((*c->run->tilt_window_deg).*field) : std::nullopt;
 }
 
 // "lo-hi" of two columns in %.2f.
@@ -320,6 +326,8 @@ const Section<Case>& caseSection() {
        {"tilt_end_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::tilt_end_mm); }},
        {"tilt_min_deg", [](R c) { return rangeEnd(runTilt(c), true); }},
        {"tilt_max_deg", [](R c) { return rangeEnd(runTilt(c), false); }},
+       {"tilt_mean_deg", [](R c) { return tiltStatistic(c, &analysis::SignalStatistics::mean); }},
+       {"tilt_std_deg", [](R c) { return tiltStatistic(c, &analysis::SignalStatistics::std_dev); }},
        {"tilt_minus_paper_simulated_deg", [](R c) { return tiltAgainstPaper(c); }},
        {"paper_hours", [](R c) -> CellValue { return c->paper ? std::optional<double>(c->paper->hours) : std::nullopt; }},
        {"wall_time_s", [](R c) -> CellValue { return ofRun(c, &Evaluated::wall_s); }},
@@ -363,7 +371,8 @@ const std::vector<MarkdownColumn>& tiltView() {
                      md::concat({rangeCell("tilt_min_deg", "tilt_max_deg"), md::literal(" ("), md::format("tilt_begin_mm", "%.0f"), md::literal("-"),
                                  md::format("tilt_end_mm", "%.0f"), md::literal(" mm)")}),
                      "not finished")},
-      {"ours - paper simulated (midpoints) deg", md::ifDefined("tilt_minus_paper_simulated_deg", md::format("tilt_minus_paper_simulated_deg", "%+.2f"), "")}};
+      {"ours mean ± sd deg", md::ifDefined("tilt_mean_deg", md::concat({md::format("tilt_mean_deg", "%.2f"), md::literal(" ± "), md::format("tilt_std_deg", "%.2f")}), "")},
+      {"ours mean - paper simulated midpoint deg", md::ifDefined("tilt_minus_paper_simulated_deg", md::format("tilt_minus_paper_simulated_deg", "%+.2f"), "")}};
   return view;
 }
 
@@ -511,8 +520,10 @@ RunEvaluation evaluatePaperRun(const analysis::Recording& rec, const study::Stud
   const analysis::EvaluatedRun run = analysis::evaluateSoilBinRun(rec, settings);
   e.window = run.window;
   e.curve = run.curve;
-  if (!run.curve.tilt_deg.empty())
+  if (!run.curve.tilt_deg.empty()) {
     e.tilt_range_deg = rangeIn(run.curve.displacement_mm, run.curve.tilt_deg, e.tilt_begin_mm, e.tilt_end_mm);
+    e.tilt_window_deg = analysis::windowStatistics(run.curve.displacement_mm, run.curve.tilt_deg, e.tilt_begin_mm, e.tilt_end_mm);
+  }
   std::vector<double> t, signal;
   const bool rigid = run.window.deformation_mm.std_dev == 0;
   e.fit_signal = rigid ? "force" : "deformation";

@@ -252,6 +252,10 @@ TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an un
   CHECK(pmma["wall_time_s"].get<double>() == 5400);
   CHECK(pmma["paper_hours"].get<double>() == 54);  // Table 1
   CHECK(pmma["paper_simulated_tilt_min_deg"].get<double>() == 2.1);
+  // The synthetic tilt is 1.2 deg per mm of deformation: 3.6 deg over the tilt window, against the
+  // midpoint 2.2 deg of the paper's simulated 2.1-2.3 deg.
+  CHECK(pmma["tilt_mean_deg"].get<double>() == Approx(3.6).epsilon(0.02));
+  CHECK(pmma["tilt_minus_paper_simulated_deg"].get<double>() == Approx(1.4).margin(0.08));
   // Its full-scale projection: the estimate (3000 s) times measured / estimated of the run (1).
   CHECK(pmma["projected_full_scale_h"].get<double>() == Approx(5400.0 / 3600));
   const nlohmann::json& s235 = doc["cases"][1];
@@ -290,7 +294,8 @@ TEST_CASE("the paper report keeps each evaluation: without its run a case is rep
   CHECK(pmma["finished"] == true);
   CHECK(pmma["kept"] == true);
   CHECK(pmma["runs_label"] == "commit A");
-  for (const char* key : {"force_mean_N", "force_std_N", "deformation_mean_mm", "fit_b", "tilt_min_deg", "wall_time_s", "projected_full_scale_h"})
+  for (const char* key : {"force_mean_N", "force_std_N", "deformation_mean_mm", "fit_b", "tilt_min_deg", "tilt_mean_deg", "wall_time_s",
+                          "projected_full_scale_h"})
     CHECK(pmma[key] == first["cases"][0][key]);
   CHECK(readText(dir / "report" / "paper-runs" / "pmma_coupled_30.json") == kept_first);
   CHECK(first["cases"][0]["kept"] == false);

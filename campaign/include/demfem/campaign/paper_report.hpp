@@ -21,8 +21,9 @@
 //   with neither is listed with its estimated cost only.
 // - Evaluation of a finished run (analysis/evaluation.hpp, spectrum.hpp): the run's sensors.csv as
 //   a calibrated recording; window statistics over the paper's 100-500 mm, scaled by stroke / 600 mm
-//   for a shortened stroke (the same fractions of the stroke); the tilt's range (min, max) over
-//   200-400 mm scaled the same way; the amplitude spectrum of the deformation over the window (of
+//   for a shortened stroke (the same fractions of the stroke); the tilt's range (min, max), mean
+//   and standard deviation over 200-400 mm scaled the same way (the report compares the mean with
+//   the midpoint of the paper's range); the amplitude spectrum of the deformation over the window (of
 //   the force for a rigid tool) and its power-law fit A = a f^b over 1 Hz up to half the sample rate.
 // - Wall time: the run's summed wall time (kRunRecord) and the full-scale projection: the estimate
 //   of the study file as given (estimate_wall_s), times measured / estimated of the run itself.
@@ -77,6 +78,7 @@ struct RunEvaluation {
   double stroke_mm = 0, window_begin_mm = 0, window_end_mm = 0, tilt_begin_mm = 0, tilt_end_mm = 0;
   analysis::WindowStatistics window;
   std::optional<std::pair<double, double>> tilt_range_deg;
+  std::optional<analysis::SignalStatistics> tilt_window_deg;  // mean and spread over the tilt window
   analysis::PowerLawFit fit;
   std::string fit_signal;  // "deformation" or "force" (rigid tool)
   analysis::Spectrum spectrum;
