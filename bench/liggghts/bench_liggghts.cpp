@@ -24,6 +24,7 @@
 #include "demfem/campaign/paper_report.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/fem/coupled_driver.hpp"
+#include "demfem/study/backend_capabilities.hpp"
 #include "demfem/study/study.hpp"
 
 #include <chrono>
@@ -321,6 +322,18 @@ void printPaperEvaluation(const std::vector<RunResult>& runs) {
                 r.deformation_mean_mm, r.deformation_std_dev_mm, r.fit_b, r.fit_b_std_error, r.tilt_min_deg, r.tilt_max_deg);
 }
 
+// Both backends must implement the laws the runs use (the study's in coupled mode): said before the
+// first run, which may take many minutes, not when the LIGGGHTS run starts after it.
+void requireBothBackends(const std::string& file, study::Study s) {
+  std::string problems;
+  for (const char* backend : {"builtin", "liggghts"}) {
+    s.dem.backend = backend;
+    for (const study::Issue& i : study::backendIssues(s, {builtin::capabilities(), liggghts::capabilities()}))
+      problems += "\n  " + file + ": " + i.path + ": " + i.message;
+  }
+  if (!problems.empty()) throw cli::InputError("the benchmark runs the study on both backends, which it does not fit:" + problems);
+}
+
 struct Summary {
   double mean = 0, stddev = 0;
 };
@@ -379,6 +392,7 @@ int main(int argc, char** argv) {
       if (const auto r = runLiggghts(file, worker_seed, window_s)) cli::writeJson(json_target, toJson(*r));
       return;
     }
+    requireBothBackends(file, g_coupled ? seededStudy(file, 1, 1) : benchStudy(file, 1, 1));
     const bool text = json_target != "-";
     if (text)
       std::printf("%-9s %5s %5s %9s %10s %8s %9s %9s %14s %11s %11s\n", "backend", "cores", "seed", "particles",
