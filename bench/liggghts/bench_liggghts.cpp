@@ -451,12 +451,15 @@ int main(int argc, char** argv) {
         const double n = static_cast<double>(seeds);
         const double se = std::sqrt((m["liggghts"].stddev * m["liggghts"].stddev + m["builtin"].stddev * m["builtin"].stddev) / n);
         const double relative = diff / (0.5 * (m["liggghts"].mean + m["builtin"].mean));
+        // One seed has no seed scatter: the difference is not set against one (null in the JSON).
+        const nlohmann::json in_errors = seeds > 1 ? nlohmann::json(diff / se) : nlohmann::json(nullptr);
+        char against[96] = "one seed: no seed scatter to compare with";
+        if (seeds > 1) std::snprintf(against, sizeof against, "%.2f standard errors of the difference (seed scatter)", diff / se);
         if (text)
-          std::printf("%s, %d core(s): liggghts - builtin = %.4g %s (%.1f %% of their mean), %.2f standard errors of "
-                      "the difference (seed scatter)\n",
-                      name, cores, diff, unit, 100 * relative, diff / se);
+          std::printf("%s, %d core(s): liggghts - builtin = %.4g %s (%.1f %% of their mean), %s\n", name, cores, diff, unit,
+                      100 * relative, against);
         return nlohmann::json{{std::string("difference_") + unit, diff}, {"relative_difference", relative},
-                              {std::string("standard_error_") + unit, se}, {"difference_in_standard_errors", diff / se}};
+                              {std::string("standard_error_") + unit, se}, {"difference_in_standard_errors", in_errors}};
       };
       nlohmann::json c{{"draught", compare("draught", draught)}};
       if (g_coupled) c["load_cell"] = compare("load cell", load_cell);
