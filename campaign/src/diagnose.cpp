@@ -159,6 +159,11 @@ double noiseErrorPercent(const std::vector<Residual>& residuals, const std::vect
   return n > 0 ? std::sqrt(sum / n) : 0.0;
 }
 
+// Whether `cause` is judged on the quantity of `r` (Cause::judged_on).
+bool judges(const Cause& cause, const Residual& r) {
+  return cause.judged_on.empty() || std::find(cause.judged_on.begin(), cause.judged_on.end(), r.quantity) != cause.judged_on.end();
+}
+
 std::string joined(const std::vector<std::string>& parts) {
   std::string s;
   for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
@@ -172,18 +177,20 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
   r.id = cause.id;
   r.description = cause.description;
   r.expected_signature = cause.expected_signature;
+  r.judged_on = cause.judged_on;
   r.match = cause.match(base.signatures, settings.tolerance);
   if (!r.match.plausible) return r;
   const std::vector<analysis::Recording> own = ofKind(recordings, cause.domain);
   const Extension e = cause.extend(study, depthsOf(own));
   if (e.parameters.empty()) throw ArgumentError("cause '" + cause.id + "': the study offers nothing to fit for it");
   r.fitted = true;
+  DiagnosisSettings judged = settings;  // the fits see the quantities of the cause's signature only
+  judged.calibration.objective.only_quantities = cause.judged_on;
   const auto cases = casesOf(own);
   FoldOutcome folds;
-  if (cases.size() >= 2) folds = crossValidate(e, cause.id, origin, own, model, settings);
+  if (cases.size() >= 2) folds = crossValidate(e, cause.id, origin, own, model, judged);
   if (settings.on_stage) settings.on_stage("fitting " + cause.id + " on all cases");
-  std::vector<analysis::Recording> runs;
-  const CalibrationResult all = calibrate({e.study, origin, own, e.parameters}, model, settings.calibration);
+  const CalibrationResult all = calibrate({e.study, origin, own, e.parameters}, model, judged.calibration);
   r.parameters = all.parameters;
   r.minima = static_cast<int>(all.minima.size());
   r.extended_study = all.calibrated_study;
@@ -200,7 +207,7 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
                 : "leave one case out, " + folds_used + " (a split cannot identify " + joined(folds.unidentified) + ")";
   std::vector<Residual> before, before_all;
   for (const Residual& b : comparable(base.baseline_residuals, base.failed_baseline_cases)) {
-    if (b.key.kind != cause.domain) continue;
+    if (b.key.kind != cause.domain || !judges(cause, b)) continue;
     before_all.push_back(b);
     if (!r.held_out || std::find(folds.held_out_cases.begin(), folds.held_out_cases.end(), b.key) != folds.held_out_cases.end())
       before.push_back(b);

@@ -257,10 +257,14 @@ Cause sensorGain() {
   return c;
 }
 
+// The soil causes' quantities: the draught's (and deformation's) level over the window.
+std::vector<std::string> windowMeans() { return {"window_mean_force_N", "window_mean_deformation_mm"}; }
+
 Cause layeredSoil() {
   Cause c;
   c.id = "layered_soil";
   c.domain = analysis::CaseKind::SoilBin;
+  c.judged_on = windowMeans();
   c.description =
       "depth-dependent soil strength: static friction per layer (Section 2.10.2), layers split at the recordings' depths but the "
       "two deepest";
@@ -290,6 +294,7 @@ Cause cohesion() {
   Cause c;
   c.id = "cohesion";
   c.domain = analysis::CaseKind::SoilBin;
+  c.judged_on = windowMeans();
   c.description = "particle cohesion (soil.interactions[].cohesion_J_m3 of the layers reached)";
   c.expected_signature = "a draught bias of the same sign at every depth";
   c.match = [](const Signatures& s, const SignatureTolerance& t) {
@@ -324,6 +329,7 @@ Cause endWall() {
   Cause c;
   c.id = "end_wall";
   c.domain = analysis::CaseKind::SoilBin;
+  c.judged_on = windowMeans();
   c.description = "the bin's end wall: particle-wall friction (soil.interactions[] with the bin material)";
   c.expected_signature = "a different end-of-stroke rise of the draught (the approaching wall)";
   c.match = [](const Signatures& s, const SignatureTolerance& t) {

@@ -37,6 +37,13 @@ std::string fittedValues(const CauseResult& c) {
   return values;
 }
 
+// The quantities a cause is fitted and judged on, space-separated ("all" for every quantity of its domain).
+std::string judgedOn(const CauseResult& c) {
+  std::string names;
+  for (const std::string& q : c.judged_on) names += (names.empty() ? "" : " ") + q;
+  return names.empty() ? std::string("all") : names;
+}
+
 // "yes", or how many distinct minima fit within the noise.
 std::string uniqueness(const RowValues& v) {
   return v.flag("unique_fit") ? std::string("yes") : "no: " + csvText(v["distinct_minima"]) + " distinct minima within the noise";
@@ -66,6 +73,7 @@ const Section<CauseRow>& rankingSection() {
        {"wall_time_s", [](const R& r) -> CellValue { return r.cause->wall_time_s; }},
        {"description", [](const R& r) -> CellValue { return r.cause->description; }},
        {"expected_signature", [](const R& r) -> CellValue { return r.cause->expected_signature; }},
+       {"judged_on", [](const R& r) -> CellValue { return judgedOn(*r.cause); }},
        {"evidence", [](const R& r) -> CellValue { return r.cause->match.evidence; }},
        {"fitted_values", [](const R& r) -> CellValue { return fittedValues(*r.cause); }, Output::MarkdownOnly}},
       [](const R& r) { return r.rank ? std::to_string(*r.rank) : std::string("-"); },
@@ -210,8 +218,8 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
         " % and lowers BIC = chi2 + k ln n by at least " + shortNum(settings.min_delta_bic) + " (docs/diagnosis.md).\n\n";
   md += "## Signatures\n\n" + signatureTable(d.signatures) + "\n## Ranking\n\n" + rankingSection().markdownOf(rankingRows(d)) + "\n## Evidence\n\n";
   for (const CauseResult& c : d.ranking)
-    md += "- `" + c.id + "` (" + c.description + "): expects " + c.expected_signature + ". " +
-          (c.match.plausible ? "Present" : "Absent") + ": " + c.match.evidence + ".\n";
+    md += "- `" + c.id + "` (" + c.description + "): expects " + c.expected_signature + "; fitted and judged on " + judgedOn(c) +
+          " quantities. " + (c.match.plausible ? "Present" : "Absent") + ": " + c.match.evidence + ".\n";
   md += "\n## Plots\n\n";
   const CauseResult* shown = d.ranking.empty() || !d.ranking.front().fitted ? nullptr : &d.ranking.front();
   if (!renderer) md += "Plots were not drawn (--no-plots).\n";

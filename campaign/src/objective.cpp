@@ -1,6 +1,7 @@
 #include "demfem/campaign/objective.hpp"
 
 #include "demfem/analysis/step_fit.hpp"
+#include "demfem/campaign/parameters.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -52,15 +53,30 @@ void addSoilRun(const analysis::Recording& rec, const ObjectiveSettings& s, Case
   if (s.soil_deformation) add("deformation_mm", run.window.deformation_mm);
 }
 
+// The names quantities() keeps: settings.only_quantities, checked against quantityNames().
+std::vector<std::string> keptNames(const ObjectiveSettings& settings) {
+  if (settings.only_quantities.empty()) return quantityNames();
+  std::vector<std::string> kept;
+  for (const std::string& name : quantityNames())
+    if (std::find(settings.only_quantities.begin(), settings.only_quantities.end(), name) != settings.only_quantities.end()) kept.push_back(name);
+  for (const std::string& name : settings.only_quantities)
+    if (std::find(kept.begin(), kept.end(), name) == kept.end()) {
+      std::string names;
+      for (const std::string& n : quantityNames()) names += (names.empty() ? "" : ", ") + n;
+      throw ArgumentError("objective: '" + name + "' is not a quantity (quantities: " + names + ")");
+    }
+  return kept;
+}
+
+}  // namespace
+
 // The order quantities are listed in (stable across measured and simulated sides).
-const std::vector<std::string>& quantityOrder() {
+const std::vector<std::string>& quantityNames() {
   static const std::vector<std::string> order = {"step_force_N",         "step_deformation_mm",        "frequency_Hz",
                                                  "damping_ratio",        "window_mean_force_N",        "window_std_force_N",
                                                  "window_mean_deformation_mm", "window_std_deformation_mm"};
   return order;
 }
-
-}  // namespace
 
 WeightSignals weightSignals(const analysis::Recording& rec) {
   const bool raw = rec.format == analysis::RecordingFormat::Raw;
@@ -74,6 +90,7 @@ WeightSignals weightSignals(const analysis::Recording& rec) {
 }
 
 std::vector<Quantity> quantities(const std::vector<analysis::Recording>& recordings, const ObjectiveSettings& settings, bool tolerate_failures) {
+  const std::vector<std::string> kept = keptNames(settings);
   std::map<analysis::CaseKey, CaseEstimates> cases;
   for (const auto& rec : recordings) {
     CaseEstimates one;
@@ -94,7 +111,7 @@ std::vector<Quantity> quantities(const std::vector<analysis::Recording>& recordi
   }
   std::vector<Quantity> out;
   for (const auto& [key, estimates] : cases)
-    for (const auto& name : quantityOrder())
+    for (const auto& name : kept)
       if (auto it = estimates.find(name); it != estimates.end()) out.push_back(pool(key, name, it->second, settings.relative_floor));
   return out;
 }

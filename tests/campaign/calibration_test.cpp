@@ -106,6 +106,35 @@ TEST_CASE("a noisy objective widens each sigma by the model's seed scatter taken
   }
 }
 
+TEST_CASE("an objective restricted to some quantities fits and scores those only, an unknown name is an error naming it", "[campaign]") {
+  const TempDir dir("restricted");
+  const auto recs = recordings(dir, {0.05}, {});
+  campaign::ObjectiveSettings all;
+  campaign::ObjectiveSettings some;
+  some.only_quantities = {"frequency_Hz", "step_force_N"};
+  const auto every = campaign::quantities(recs, all, false);
+  const auto kept = campaign::quantities(recs, some, false);
+  REQUIRE(every.size() == 4);
+  REQUIRE(kept.size() == 2);
+  CHECK(kept[0].name == "step_force_N");  // listed in quantityNames() order, not the request's
+  CHECK(kept[1].name == "frequency_Hz");
+  CHECK(kept[0].value == every[0].value);
+  CHECK(kept[1].sigma == every[2].sigma);
+  campaign::WeightDropModel model;
+  campaign::CalibrationOptions options = quickOptions({});
+  options.objective = some;
+  const auto residuals = campaign::predict(campaign::test::fixtureStudyJson(), campaign::test::fixtureStudyPath().string(), recs, model, options);
+  REQUIRE(residuals.size() == 2);
+  CHECK(residuals[1].quantity == "frequency_Hz");
+  some.only_quantities.push_back("window_mean_force");
+  try {
+    campaign::quantities(recs, some, false);
+    FAIL("an unknown quantity name was accepted");
+  } catch (const campaign::ArgumentError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("'window_mean_force' is not a quantity") && Catch::Contains("window_mean_force_N"));
+  }
+}
+
 TEST_CASE("bad --fit arguments are errors naming the argument", "[campaign]") {
   const auto study = campaign::test::fixtureStudyJson();
   const std::string origin = campaign::test::fixtureStudyPath().string();

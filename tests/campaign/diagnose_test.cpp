@@ -13,6 +13,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <fstream>
 
 using namespace demfem;
@@ -92,4 +93,16 @@ TEST_CASE("weight drops of a beam with no effect beyond noise give no significan
   INFO("reason: " << d.reason);
   CHECK_FALSE(d.cause);
   CHECK(d.baseline_error_percent < 5.0);
+}
+
+TEST_CASE("each cause is judged on quantities of the objective: the weight causes on all, the soil causes on the window means",
+          "[campaign][diagnose]") {
+  const auto& names = campaign::quantityNames();
+  for (const campaign::Cause& c : campaign::causeCatalogue()) {
+    INFO(c.id);
+    for (const std::string& q : c.judged_on) CHECK(std::find(names.begin(), names.end(), q) != names.end());
+    if (c.domain == analysis::CaseKind::CalibrationWeight) CHECK(c.judged_on.empty());
+    if (c.domain == analysis::CaseKind::SoilBin)
+      CHECK(c.judged_on == std::vector<std::string>{"window_mean_force_N", "window_mean_deformation_mm"});
+  }
 }

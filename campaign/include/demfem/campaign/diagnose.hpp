@@ -12,7 +12,8 @@
 //     out; needs two or more cases). If a fold leaves a parameter unidentified, held-out prediction
 //     is impossible: this is said (`split`) and the cause is ranked on all cases (in-sample).
 //     Finally the extension is fitted on all cases (the values reported, with their standard
-//     deviations and identification, and the extended study).
+//     deviations and identification, and the extended study). Every fit, and every error and BIC
+//     of the cause below, uses the quantities of its signature (Cause::judged_on) only.
 //  4. Errors: a case's error is the root mean square over its quantities (objective.hpp: steady
 //     force and deformation, frequency, damping ratio; window means and spreads) of the relative
 //     difference 100 (sim - meas) / meas, in percent; a set of cases: the RMS over all their
@@ -83,6 +84,7 @@ struct CauseResult {
   std::string id;
   std::string description;
   std::string expected_signature;
+  std::vector<std::string> judged_on;        // Cause::judged_on (empty: every quantity of its domain)
   SignatureMatch match;
   bool fitted = false;                       // false: not plausible, not fitted
   std::vector<FittedParameter> parameters;   // the fit on all cases

@@ -9,6 +9,10 @@
 //   extension does not own, and the extended study at the returned start values is valid.
 // - match() reads the signatures only; it says whether the cause is plausible (its signature is
 //   present beyond the measured scatter) and gives the evidence in one sentence.
+// - judged_on: what the cause is fitted and judged on. The soil causes move the draught's level, so
+//   they are judged on the window means; the window spreads belong to the fluctuation signature,
+//   which none of them claims (fitting them together trades one against the other,
+//   docs/diagnosis.md, "The small bin").
 // - extend() throws ArgumentError naming the cause when the study cannot take the extension (e.g.
 //   no deformable tool, no soil).
 #pragma once
@@ -48,6 +52,9 @@ struct Cause {
   analysis::CaseKind domain = analysis::CaseKind::CalibrationWeight;  // the recordings it explains
   std::string description;
   std::string expected_signature;
+  // The quantities (objective.hpp names) the signature moves: the extension is fitted on them and
+  // judged by them (held-out error, noise, BIC). Empty: every quantity of the domain.
+  std::vector<std::string> judged_on;
   std::function<SignatureMatch(const analysis::Signatures&, const SignatureTolerance&)> match;
   // `depths_mm`: the soil-bin recordings' depths (soil causes split or pick layers by them).
   std::function<Extension(const nlohmann::ordered_json& study, const std::vector<double>& depths_mm)> extend;

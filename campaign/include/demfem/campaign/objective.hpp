@@ -34,7 +34,14 @@ struct ObjectiveSettings {
   analysis::AnalysisSettings analysis;  // Section 2.3 window and landmarks for soil-bin runs
   double relative_floor = 1e-3;         // sigma >= relative_floor * |value|
   bool soil_deformation = true;         // soil-bin deformation quantities (false for a rigid tool)
+  // Empty: every quantity above. Otherwise only these names (a diagnosis fits and judges a cause on
+  // the quantities its signature moves, docs/diagnosis.md); a name that is not a quantity above is
+  // an ArgumentError.
+  std::vector<std::string> only_quantities;
 };
+
+// The quantity names of the header comment, in the order quantities() lists them.
+const std::vector<std::string>& quantityNames();
 
 // A calibration-weight recording in N and mm (raw DAQ units times the sidecar's factors).
 struct WeightSignals {
