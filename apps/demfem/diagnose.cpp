@@ -64,6 +64,9 @@ void addDiagnoseCommand(CLI::App& app) {
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
   cmd->add_option("--min-delta-bic", s.min_delta_bic, "BIC drop a cause must reach")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--min-held-out-folds", s.min_held_out_folds, "Held-out cases the named cause must predict")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   addOptimiserOptions(*cmd, s.calibration, "Optimiser starts per fit");
   auto* x_tolerance = cmd->add_option("--x-tolerance", s.calibration.x_tolerance,
                                       "Optimiser tolerance, as a fraction of each parameter's bounds (soil: "

@@ -198,7 +198,8 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
   r.runs = all.calibrated_runs;
   r.chi2 = all.chi2;
   r.model_runs = folds.model_runs + all.model_runs;
-  r.held_out = !folds.held_out_cases.empty();
+  r.held_out_folds = static_cast<int>(folds.held_out_cases.size());
+  r.held_out = r.held_out_folds > 0;
   const std::string folds_used = std::to_string(folds.held_out_cases.size()) + " of " + std::to_string(cases.size()) + " folds";
   r.split = !r.held_out && cases.size() < 2 ? "one case only: ranked on all cases (in-sample)"
             : !r.held_out ? "no split can identify the extension (" + joined(folds.unidentified) + "): ranked on all cases (in-sample)"
@@ -227,6 +228,20 @@ CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json
   r.delta_bic = r.bic - chi2WithScatter(before_all, base.seed_scatter, m);
   r.wall_time_s = secondsSince(start);
   return r;
+}
+
+// The quantities of `ran` that no cause of `causes` is judged on, each with the baseline's error.
+std::vector<UnjudgedQuantity> unjudgedQuantities(const std::vector<Residual>& ran, const std::vector<const Cause*>& causes) {
+  std::vector<UnjudgedQuantity> out;
+  for (const std::string& name : quantityNames()) {
+    std::vector<Residual> of;
+    for (const Residual& r : ran)
+      if (r.quantity == name) of.push_back(r);
+    if (of.empty()) continue;
+    const auto judgesIt = [&](const Cause* c) { return c->domain == of.front().key.kind && judges(*c, of.front()); };
+    if (std::none_of(causes.begin(), causes.end(), judgesIt)) out.push_back({name, errorPercent(of)});
+  }
+  return out;
 }
 
 void rank(std::vector<CauseResult>& ranking) {
@@ -259,6 +274,12 @@ void decide(Diagnosis& d, const ordered_json& study, const DiagnosisSettings& se
   if (best.gain_percent < settings.min_gain_percent) {
     d.reason = "the best extension (" + best.id + ") cuts the error by " + number(best.gain_percent) + " %, less than the " +
                number(settings.min_gain_percent) + " % required";
+    return;
+  }
+  if (best.held_out_folds < settings.min_held_out_folds) {
+    d.reason = "the best extension (" + best.id + ") " +
+               (best.held_out ? "predicts " + std::to_string(best.held_out_folds) + " held-out case(s)" : std::string("is fitted in-sample only")) +
+               ", fewer than the " + std::to_string(settings.min_held_out_folds) + " held-out predictions required (" + best.split + ")";
     return;
   }
   if (best.delta_bic > -settings.min_delta_bic) {
@@ -316,6 +337,7 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   d.noise_error_percent = noiseErrorPercent(ran, d.seed_scatter, settings.calibration.model_seeds);
   const analysis::ComparisonResult comparison = analysis::compare(recordings, d.baseline_runs, settings.calibration.objective.analysis);
   d.signatures = analysis::signaturesOf(comparison, settings.signatures);
+  d.unjudged = unjudgedQuantities(ran, causes);
   for (const Cause* c : causes) d.ranking.push_back(assess(*c, d, study, origin, recordings, model, settings));
   rank(d.ranking);
   decide(d, study, settings);

@@ -61,6 +61,7 @@ const Section<CauseRow>& rankingSection() {
        {"unique_fit", [](const R& r) -> CellValue { return r.cause->fitted && r.cause->minima == 1; }},
        {"distinct_minima", [](const R& r) -> CellValue { return static_cast<long long>(r.cause->minima); }},
        {"held_out", [](const R& r) -> CellValue { return r.cause->held_out; }},
+       {"held_out_folds", [](const R& r) -> CellValue { return static_cast<long long>(r.cause->held_out_folds); }},
        {"split", [](const R& r) -> CellValue { return r.cause->split; }},
        {"error_before_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_before_percent); }},
        {"error_after_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_after_percent); }},
@@ -168,6 +169,21 @@ nlohmann::json seedScatterJson(const std::vector<SeedScatter>& scatter) {
   return out;
 }
 
+nlohmann::json unjudgedJson(const std::vector<UnjudgedQuantity>& unjudged) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const UnjudgedQuantity& u : unjudged) out.push_back({{"quantity", u.quantity}, {"baseline_error_percent", u.baseline_error_percent}});
+  return out;
+}
+
+// What no cause was judged on, for report.md ("" when every quantity was).
+std::string unjudgedText(const std::vector<UnjudgedQuantity>& unjudged) {
+  if (unjudged.empty()) return "";
+  std::string md = "Not explained by any cause considered (none is judged on these quantities; docs/diagnosis.md): ";
+  for (std::size_t i = 0; i < unjudged.size(); ++i)
+    md += (i ? ", " : "") + ("`" + unjudged[i].quantity + "` (baseline error " + shortNum(unjudged[i].baseline_error_percent) + " %)");
+  return md + ".\n\n";
+}
+
 }  // namespace
 
 nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, const std::string& extended_study_path) {
@@ -191,8 +207,10 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
            {{"min_error_percent", settings.min_error_percent},
             {"min_gain_percent", settings.min_gain_percent},
             {"min_delta_bic", settings.min_delta_bic},
+            {"min_held_out_folds", settings.min_held_out_folds},
             {"scatter_seeds", settings.scatter_seeds}}},
           {"ranking", ranking},
+          {"unjudged", unjudgedJson(d.unjudged)},
           {"signatures", analysis::toJson(d.signatures)},
           {"extended_study", extended_study_path},
           {"wall_time_s", d.wall_time_s}};
@@ -213,9 +231,11 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   if (!d.failed_baseline_cases.empty())
     md += "Left out of every error and BIC: the cases whose baseline run failed (DEM blow-up): " +
           caseLabels(d.failed_baseline_cases).dump() + ".\n\n";
+  md += unjudgedText(d.unjudged);
   md += "Thresholds: a cause is named when the baseline error is at least " + shortNum(settings.min_error_percent) +
         " %, its extension cuts the held-out error by at least " + shortNum(settings.min_gain_percent) +
-        " % and lowers BIC = chi2 + k ln n by at least " + shortNum(settings.min_delta_bic) + " (docs/diagnosis.md).\n\n";
+        " % and lowers BIC = chi2 + k ln n by at least " + shortNum(settings.min_delta_bic) + ", predicting at least " +
+        std::to_string(settings.min_held_out_folds) + " held-out cases (docs/diagnosis.md).\n\n";
   md += "## Signatures\n\n" + signatureTable(d.signatures) + "\n## Ranking\n\n" + rankingSection().markdownOf(rankingRows(d)) + "\n## Evidence\n\n";
   for (const CauseResult& c : d.ranking)
     md += "- `" + c.id + "` (" + c.description + "): expects " + c.expected_signature + "; fitted and judged on " + judgedOn(c) +

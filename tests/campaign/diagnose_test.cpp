@@ -56,6 +56,7 @@ void requireNamed(const campaign::Diagnosis& d, const std::string& cause) {
   CHECK(*d.cause == cause);
   CHECK(d.gain_percent >= 50.0);
   CHECK(d.ranking.front().held_out);
+  CHECK(d.unjudged.empty());  // every weight cause is judged on every weight quantity
 }
 
 }  // namespace

@@ -35,7 +35,10 @@
 //     delta_bic. The first cause is named when all hold: the baseline error on all cases is at least
 //     min_error_percent (below it the model already agrees with the recordings as well as two
 //     independent correct models of the tool agree with each other, docs/diagnosis.md), its gain
-//     (step 4) is at least min_gain_percent, and delta_bic <= -min_delta_bic.
+//     (step 4) is at least min_gain_percent, delta_bic <= -min_delta_bic, and its error after is a
+//     prediction of at least min_held_out_folds held-out cases (an in-sample fit, or the prediction
+//     of one case, is ranked but never named: two layer frictions fitted to two depths' means
+//     predict a third depth's by chance as often as by cause, docs/diagnosis.md).
 //     Otherwise the verdict is "no significant discrepancy" with the reason.
 // - Every model run goes through the calibration's run cache (options.cache_dir).
 // - Throws ArgumentError for unusable input (no candidate cause, a named cause unknown, a case the
@@ -76,6 +79,7 @@ struct DiagnosisSettings {
   double min_error_percent = 5.0;
   double min_gain_percent = 50.0;
   double min_delta_bic = 10.0;
+  int min_held_out_folds = 2;  // held-out cases the named cause must predict
   int scatter_seeds = 3;  // soil-bin cases: deposition seeds of the baseline's seed scatter (1: none)
   std::function<void(const std::string&)> on_stage;  // "fitting clamp_compliance, fold 2/2", for progress
 };
@@ -90,6 +94,7 @@ struct CauseResult {
   std::vector<FittedParameter> parameters;   // the fit on all cases
   int minima = 0;                            // distinct minima within the noise (1 = unique fit)
   bool held_out = false;                     // false: ranked on all cases (see split)
+  int held_out_folds = 0;                    // folds that identified the extension and predicted their case
   std::string split;                         // how the error after was obtained
   double error_before_percent = 0.0;         // held-out cases (or all cases), baseline
   double error_after_percent = 0.0;          // the same cases, extended model
@@ -113,6 +118,13 @@ struct SeedScatter {
   int seeds = 0;
 };
 
+// A quantity no candidate cause is judged on (Cause::judged_on), with the baseline's error on it:
+// what the simulation gets wrong that the catalogue does not explain (the soil runs' window spreads).
+struct UnjudgedQuantity {
+  std::string quantity;
+  double baseline_error_percent = 0.0;  // RMS over the cases whose baseline ran (step 4)
+};
+
 struct Diagnosis {
   analysis::Signatures signatures;
   std::vector<Residual> baseline_residuals;
@@ -125,6 +137,7 @@ struct Diagnosis {
   double noise_error_percent = 0.0;          // all cases whose baseline ran: a correct model's error from the scatter alone (step 4)
   int residual_count = 0;
   std::vector<CauseResult> ranking;         // fitted causes ranked first, then the others
+  std::vector<UnjudgedQuantity> unjudged;   // quantities no candidate cause is judged on
   std::optional<std::string> cause;         // the named cause
   std::string reason;                       // why it was named, or why none was
   double gain_percent = 0.0;                // the named cause's; 0 without one
