@@ -5,6 +5,7 @@
 #include "demfem/analysis/evaluation.hpp"
 #include "demfem/analysis/recording.hpp"
 #include "demfem/analysis/report_section.hpp"
+#include "demfem/analysis/soil_motion_report.hpp"
 #include "demfem/analysis/spectrum.hpp"
 #include "demfem/backends/physics/time_step.hpp"
 #include "demfem/study/tool_motion.hpp"
@@ -27,6 +28,7 @@ constexpr double kPaperStrokeMm = 600;  // Section 2.9
 // Section 2.3 / Fig. 15: the statistics window; Section 3: the tilt window (mm of displacement).
 constexpr double kWindowBeginMm = 100, kWindowEndMm = 500, kTiltBeginMm = 200, kTiltEndMm = 400;
 constexpr double kFitLowHz = 1.0;
+constexpr double kSoilMotionAtMm = 300;  // Section 3.5, Fig. 16
 // What a report keeps of each evaluation (see contract): the curve at one sample per
 // kCurveStepMm, the spectrum as means over kSpectrumBinsPerDecade logarithmic bins per decade.
 constexpr const char* kKeptDirectory = "paper-runs";
@@ -121,6 +123,32 @@ nlohmann::json roundedArray(const std::vector<double>& v) {
   return a;
 }
 
+// A number that may be NaN (no value) as JSON null, and back.
+nlohmann::json orNull(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
+double numberOrNaN(const nlohmann::json& j) { return j.is_null() ? std::numeric_limits<double>::quiet_NaN() : j.get<double>(); }
+
+nlohmann::json soilMotionJson(const std::optional<SoilMotionEvaluation>& m) {
+  if (!m) return nullptr;
+  return {{"displacement_mm", m->displacement_mm},     {"moving_depth_mm", m->moving_depth_mm},
+          {"moving_length_mm", m->moving_length_mm},   {"moving_width_mm", m->moving_width_mm},
+          {"moving_particles", m->moving_particles},   {"front_min_mm_s", m->front_min_mm_s},
+          {"front_median_mm_s", m->front_median_mm_s}, {"front_max_mm_s", m->front_max_mm_s},
+          {"front_particles", m->front_particles},     {"streamline_order", orNull(m->streamline_order)},
+          {"mean_streamline_length_mm", orNull(m->mean_streamline_length_mm)}, {"streamlines", m->streamlines}};
+}
+
+std::optional<SoilMotionEvaluation> soilMotionOf(const nlohmann::json& j) {
+  if (j.is_null()) return std::nullopt;
+  SoilMotionEvaluation m;
+  m.displacement_mm = j.at("displacement_mm"), m.moving_depth_mm = j.at("moving_depth_mm");
+  m.moving_length_mm = j.at("moving_length_mm"), m.moving_width_mm = j.at("moving_width_mm");
+  m.moving_particles = j.at("moving_particles"), m.front_min_mm_s = j.at("front_min_mm_s");
+  m.front_median_mm_s = j.at("front_median_mm_s"), m.front_max_mm_s = j.at("front_max_mm_s");
+  m.front_particles = j.at("front_particles"), m.streamline_order = numberOrNaN(j.at("streamline_order"));
+  m.mean_streamline_length_mm = numberOrNaN(j.at("mean_streamline_length_mm")), m.streamlines = j.at("streamlines");
+  return m;
+}
+
 nlohmann::json statisticsJson(const analysis::SignalStatistics& s) {
   return {{"mean", s.mean}, {"std_dev", s.std_dev}, {"samples", s.samples}};
 }
@@ -156,6 +184,7 @@ nlohmann::json keptJson(const ReportCase& c) {
            {{"time_s", roundedArray(e.curve.time_s)}, {"displacement_mm", roundedArray(e.curve.displacement_mm)},
             {"force_N", roundedArray(e.curve.force_N)}, {"deformation_mm", roundedArray(e.curve.deformation_mm)},
             {"tilt_deg", roundedArray(e.curve.tilt_deg)}}},
+          {"soil_motion", soilMotionJson(e.soil_motion)},
           {"wall_time_s", e.wall_s},
           {"run_estimate_s", e.run_estimate_s}};
 }
@@ -190,6 +219,7 @@ Evaluated evaluationOf(const nlohmann::json& j) {
   if (e.curve.time_s.size() != n || e.curve.force_N.size() != n || e.curve.deformation_mm.size() != n ||
       (!e.curve.tilt_deg.empty() && e.curve.tilt_deg.size() != n) || e.spectrum.frequency_Hz.size() != e.spectrum.amplitude.size())
     throw std::invalid_argument("/curve or /spectrum: arrays of different lengths");
+  if (j.contains("soil_motion")) e.soil_motion = soilMotionOf(j.at("soil_motion"));  // absent: kept before Fig. 16 was
   e.wall_s = j.at("wall_time_s"), e.run_estimate_s = j.at("run_estimate_s");
   return e;
 }
@@ -282,9 +312,28 @@ CellValue tiltStatistic(Case c, double analysis::SignalStatistics::*field) {
   return c->run && c->run->tilt_window_deg ? std::optional<double>((*c->run->tilt_window_deg).*field) : std::nullopt;
 }
 
-// "lo-hi" of two columns in %.2f.
-MarkdownCell rangeCell(const std::string& lo, const std::string& hi) {
-  return md::concat({md::format(lo, "%.2f"), md::literal("-"), md::format(hi, "%.2f")});
+// "lo-hi" of two columns.
+MarkdownCell rangeCell(const std::string& lo, const std::string& hi, const char* format = "%.2f") {
+  return md::concat({md::format(lo, format), md::literal("-"), md::format(hi, format)});
+}
+
+// A measure of our soil motion (Fig. 16); absent without particle files.
+CellValue ofMotion(Case c, double SoilMotionEvaluation::*field) {
+  return c->run && c->run->soil_motion ? std::optional<double>((*c->run->soil_motion).*field) : std::nullopt;
+}
+
+CellValue motionCount(Case c, std::size_t SoilMotionEvaluation::*field) {
+  if (!c->run || !c->run->soil_motion) return std::optional<double>();
+  return static_cast<long long>((*c->run->soil_motion).*field);
+}
+
+// The paper's depth in motion or an end of its front speed range (Section 3.5).
+CellValue paperMovingDepth(Case c) { return c->paper ? c->paper->moving_depth_mm : std::nullopt; }
+CellValue paperFrontSpeed(Case c, bool first) { return c->paper ? rangeEnd(c->paper->front_speed_mm_s, first) : std::nullopt; }
+
+CellValue movingDepthAgainstPaper(Case c) {
+  if (!c->run || !c->run->soil_motion || !c->paper || !c->paper->moving_depth_mm) return std::nullopt;
+  return std::optional<double>(c->run->soil_motion->moving_depth_mm - *c->paper->moving_depth_mm);
 }
 
 MarkdownCell ifFinished(MarkdownCell cell) { return md::onlyIf("finished", std::move(cell), ""); }
@@ -329,6 +378,22 @@ const Section<Case>& caseSection() {
        {"tilt_mean_deg", [](R c) { return tiltStatistic(c, &analysis::SignalStatistics::mean); }},
        {"tilt_std_deg", [](R c) { return tiltStatistic(c, &analysis::SignalStatistics::std_dev); }},
        {"tilt_minus_paper_simulated_deg", [](R c) { return tiltAgainstPaper(c); }},
+       {"paper_moving_depth_mm", [](R c) { return paperMovingDepth(c); }},
+       {"paper_front_speed_min_mm_s", [](R c) { return paperFrontSpeed(c, true); }},
+       {"paper_front_speed_max_mm_s", [](R c) { return paperFrontSpeed(c, false); }},
+       {"soil_motion_at_mm", [](R c) { return ofMotion(c, &SoilMotionEvaluation::displacement_mm); }},
+       {"moving_depth_mm", [](R c) { return ofMotion(c, &SoilMotionEvaluation::moving_depth_mm); }},
+       {"moving_depth_minus_paper_mm", [](R c) { return movingDepthAgainstPaper(c); }},
+       {"moving_length_mm", [](R c) { return ofMotion(c, &SoilMotionEvaluation::moving_length_mm); }},
+       {"moving_width_mm", [](R c) { return ofMotion(c, &SoilMotionEvaluation::moving_width_mm); }},
+       {"moving_particles", [](R c) { return motionCount(c, &SoilMotionEvaluation::moving_particles); }},
+       {"front_speed_min_mm_s", [](R c) { return ofMotion(c, &SoilMotionEvaluation::front_min_mm_s); }},
+       {"front_speed_median_mm_s", [](R c) { return ofMotion(c, &SoilMotionEvaluation::front_median_mm_s); }},
+       {"front_speed_max_mm_s", [](R c) { return ofMotion(c, &SoilMotionEvaluation::front_max_mm_s); }},
+       {"front_particles", [](R c) { return motionCount(c, &SoilMotionEvaluation::front_particles); }},
+       {"streamline_order", [](R c) { return ofMotion(c, &SoilMotionEvaluation::streamline_order); }},
+       {"streamlines", [](R c) { return motionCount(c, &SoilMotionEvaluation::streamlines); }},
+       {"mean_streamline_length_mm", [](R c) { return ofMotion(c, &SoilMotionEvaluation::mean_streamline_length_mm); }},
        {"paper_hours", [](R c) -> CellValue { return c->paper ? std::optional<double>(c->paper->hours) : std::nullopt; }},
        {"wall_time_s", [](R c) -> CellValue { return ofRun(c, &Evaluated::wall_s); }},
        {"run_estimate_s", [](R c) -> CellValue { return ofRun(c, &Evaluated::run_estimate_s); }},
@@ -376,6 +441,31 @@ const std::vector<MarkdownColumn>& tiltView() {
   return view;
 }
 
+// Section 3.5's soil motion beside Fig. 16's (a view of caseSection()).
+const std::vector<MarkdownColumn>& soilMotionView() {
+  static const std::vector<MarkdownColumn> view{
+      {"model", md::text("model")},
+      {"paper: depth in motion mm", md::format("paper_moving_depth_mm", "%.0f")},
+      {"ours mm (at displacement)",
+       md::ifDefined("moving_depth_mm",
+                     md::concat({md::format("moving_depth_mm", "%.0f"), md::literal(" (at "), md::format("soil_motion_at_mm", "%.0f"), md::literal(" mm)")}),
+                     "no particle files")},
+      {"ours - paper mm", md::ifDefined("moving_depth_minus_paper_mm", md::format("moving_depth_minus_paper_mm", "%+.0f"), "")},
+      {"paper: in front of the tool mm/s", rangeCell("paper_front_speed_min_mm_s", "paper_front_speed_max_mm_s", "%.0f")},
+      {"ours mm/s (median; particles)",
+       md::ifDefined("front_speed_min_mm_s",
+                     md::concat({rangeCell("front_speed_min_mm_s", "front_speed_max_mm_s", "%.0f"), md::literal(" ("),
+                                 md::format("front_speed_median_mm_s", "%.0f"), md::literal("; "), md::format("front_particles", "%.0f"), md::literal(")")}),
+                     "")},
+      {"ours: region in motion, length x width mm",
+       md::ifDefined("moving_length_mm", md::concat({md::format("moving_length_mm", "%.0f"), md::literal(" x "), md::format("moving_width_mm", "%.0f")}), "")},
+      {"ours: streamline order (mean length mm)",
+       md::ifDefined("moving_length_mm",
+                     md::concat({md::format("streamline_order", "%.2f"), md::literal(" ("), md::format("mean_streamline_length_mm", "%.0f"), md::literal(")")}),
+                     "")}};
+  return view;
+}
+
 // Computing time beside Table 1 (a view of caseSection()).
 const std::vector<MarkdownColumn>& hoursView() {
   static const std::vector<MarkdownColumn> view{
@@ -388,6 +478,25 @@ const std::vector<MarkdownColumn>& hoursView() {
       {"ours / paper", md::format("projected_over_paper", "%.2g")},
       {"runs", md::onlyIf("finished", md::concat({md::onlyIf("kept", md::literal("kept: "), "this report: "), md::text("runs_label")}), "")}};
   return view;
+}
+
+// How the soil-motion table's numbers are measured, from the settings they are measured with.
+std::string soilMotionIntroduction() {
+  const analysis::SoilMotionSettings s;
+  return "From the particle files of runs with `output.vtk_every` > 0, by `demfem soil-motion`'s measures and defaults, at the "
+         "frame nearest to the displacement: in motion is faster than " + formatted("%g", s.threshold_m_s * 1e3) +
+         " mm/s (the paper does not state its threshold); the depth is the lowest point of the moving particles below the "
+         "surface; the speeds are those of the particles directly in front of the tool (across its width, from its tip to the "
+         "surface, " + formatted("%g", s.front_reach_m * 1e3) + " mm ahead of its front face); the streamline order is the "
+         "alignment of the moving particles' directions on the vertical section through the tool (1: all parallel).\n\n";
+}
+
+// The cases the paper describes the soil motion of (Fig. 16).
+std::vector<Case> soilMotionRows(const std::vector<ReportCase>& cases) {
+  std::vector<Case> rows;
+  for (const ReportCase& c : cases)
+    if (c.paper && c.paper->moving_depth_mm) rows.push_back(&c);
+  return rows;
 }
 
 std::vector<Case> caseRows(const std::vector<ReportCase>& cases) {
@@ -485,17 +594,18 @@ std::string plotFile(analysis::StagedOutput& out, const analysis::GnuplotRendere
 
 const std::vector<PaperCase>& paperCases() {
   using K = study::StudyKind;
-  // Table 1 (velocity, measurement time, hours); Section 3 text (tilt at 200-400 mm, PMMA).
+  // Table 1 (velocity, measurement time, hours); Section 3 text (tilt at 200-400 mm, PMMA); Section 3.5
+  // text (Fig. 16 at 300 mm, 42 mm deep: depth in motion, speeds directly in front of the tool).
   static const std::vector<PaperCase> cases{
-      {"S235", K::DemOnly, 18, 31.19, 19.24, 44, std::nullopt, std::nullopt},
-      {"S235", K::DemOnly, 30, 30.03, 19.98, 46, std::nullopt, std::nullopt},
-      {"S235", K::DemOnly, 42, 32.22, 18.62, 43, std::nullopt, std::nullopt},
-      {"S235", K::Coupled, 18, 31.19, 19.24, 28, std::nullopt, std::nullopt},
-      {"S235", K::Coupled, 30, 30.03, 19.98, 52, std::nullopt, std::nullopt},
-      {"S235", K::Coupled, 42, 32.22, 18.62, 96, std::nullopt, std::nullopt},
-      {"PMMA", K::Coupled, 18, 36.14, 16.60, 46, std::pair{0.2, 0.3}, std::pair{0.7, 0.9}},
-      {"PMMA", K::Coupled, 30, 28.76, 20.86, 54, std::pair{2.0, 2.1}, std::pair{2.1, 2.3}},
-      {"PMMA", K::Coupled, 42, 34.09, 17.60, 42, std::pair{5.3, 6.5}, std::pair{5.6, 8.7}}};
+      {"S235", K::DemOnly, 18, 31.19, 19.24, 44, std::nullopt, std::nullopt, std::nullopt, std::nullopt},
+      {"S235", K::DemOnly, 30, 30.03, 19.98, 46, std::nullopt, std::nullopt, std::nullopt, std::nullopt},
+      {"S235", K::DemOnly, 42, 32.22, 18.62, 43, std::nullopt, std::nullopt, 58.0, std::pair{23.0, 28.0}},
+      {"S235", K::Coupled, 18, 31.19, 19.24, 28, std::nullopt, std::nullopt, std::nullopt, std::nullopt},
+      {"S235", K::Coupled, 30, 30.03, 19.98, 52, std::nullopt, std::nullopt, std::nullopt, std::nullopt},
+      {"S235", K::Coupled, 42, 32.22, 18.62, 96, std::nullopt, std::nullopt, 55.0, std::pair{23.0, 40.0}},
+      {"PMMA", K::Coupled, 18, 36.14, 16.60, 46, std::pair{0.2, 0.3}, std::pair{0.7, 0.9}, std::nullopt, std::nullopt},
+      {"PMMA", K::Coupled, 30, 28.76, 20.86, 54, std::pair{2.0, 2.1}, std::pair{2.1, 2.3}, std::nullopt, std::nullopt},
+      {"PMMA", K::Coupled, 42, 34.09, 17.60, 42, std::pair{5.3, 6.5}, std::pair{5.6, 8.7}, 83.0, std::pair{40.0, 100.0}}};
   return cases;
 }
 
@@ -538,8 +648,31 @@ RunEvaluation evaluatePaperRun(const analysis::Recording& rec, const study::Stud
   return e;
 }
 
+namespace {
+
+// Fig. 16's measures of a run with particle files at kSoilMotionAtMm scaled by stroke / 600 mm.
+SoilMotionEvaluation soilMotionAt(const fs::path& run_dir, double stroke_mm) {
+  analysis::SoilMotionSettings settings;
+  settings.displacements_m = {kSoilMotionAtMm * std::min(1.0, stroke_mm / kPaperStrokeMm) * 1e-3};
+  const analysis::SoilMotionRun run = analysis::analyseRun(run_dir, settings);
+  const analysis::SoilMotionInstant& in = run.instants.at(0);
+  SoilMotionEvaluation m;
+  m.displacement_mm = in.displacement_m * 1e3;
+  m.moving_depth_mm = in.extent.depth_m * 1e3, m.moving_length_mm = in.extent.length_m * 1e3, m.moving_width_mm = in.extent.width_m * 1e3;
+  m.moving_particles = in.extent.count;
+  m.front_min_mm_s = in.front.min_m_s * 1e3, m.front_median_mm_s = in.front.median_m_s * 1e3, m.front_max_mm_s = in.front.max_m_s * 1e3;
+  m.front_particles = in.front.count;
+  m.streamline_order = in.order.order;
+  m.mean_streamline_length_mm = in.streamline_statistics.mean_length_m * 1e3;
+  m.streamlines = in.streamline_statistics.count;
+  return m;
+}
+
+}  // namespace
+
 RunEvaluation evaluateCampaignRun(const fs::path& run_dir, const study::Study& run_study) {
   RunEvaluation e = evaluatePaperRun(analysis::readRecording(run_dir / "sensors.csv"), run_study);
+  if (fs::exists(run_dir / "vtk" / "particles.pvd")) e.soil_motion = soilMotionAt(run_dir, e.stroke_mm);
   std::ifstream record(run_dir / kRunRecord);
   if (!record) throw analysis::InputError((run_dir / kRunRecord).string() + ": missing (the run's wall time)");
   try {
@@ -573,6 +706,8 @@ nlohmann::json writePaperReport(const std::vector<fs::path>& study_files, const 
      << "## Time step\n\n" << timeStepSection(cases, o.convergence)
      << "## Cases (Table 1), Fig. 15 means and Fig. 17 fits\n\n" << caseSection().markdownOf(caseRows(cases))
      << "\n## Tilt of the PMMA tool at 200-400 mm (Section 3)\n\n" << caseSection().markdownOf(tiltRows(cases), tiltView())
+     << "\n## Soil motion at " << formatted("%.0f", kSoilMotionAtMm) << " mm, 42 mm deep (Section 3.5, Fig. 16)\n\n" << soilMotionIntroduction()
+     << caseSection().markdownOf(soilMotionRows(cases), soilMotionView())
      << "\n## Computing time beside Table 1\n\nOurs: the built-in DEM on this machine; the projection scales the "
         "full-scale estimate (`demfem validate`) by the measured / estimated cost of the run itself.\n\n"
      << caseSection().markdownOf(caseRows(cases), hoursView()) << '\n';

@@ -1,6 +1,7 @@
 // The reports of calibrate, diagnose and the paper campaign: every CSV table's cells equal the JSON
 // document's values (both generated from one declaration of the table's columns), the numbers put
 // in reach the JSON and the Markdown unchanged, absent values are null.
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/analysis/synthetic.hpp"
 #include "demfem/campaign/calibration.hpp"
 #include "demfem/campaign/diagnose.hpp"
@@ -8,6 +9,7 @@
 #include "demfem/campaign/paper_report.hpp"
 #include "support/csv_json.hpp"
 #include "support/temp_dir.hpp"
+#include "demfem/vtkio/vtk_files.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -318,4 +320,93 @@ TEST_CASE("the paper report keeps each evaluation: without its run a case is rep
     CHECK_THROWS_WITH(writePaperReport(files, options, out),
                       Catch::Matchers::Contains("pmma_coupled_30.json: not a kept evaluation of pmma_coupled_30"));
   }
+}
+
+namespace {
+
+// Particle and tool files of a run (vtk/particles.pvd, vtk/dem-PMMA.pvd) like a coupled run's:
+// a lattice of 10 mm spheres (x 0-100, y 0-80, z 0-400 mm, surface at 80 mm) and a 20 mm wide,
+// 10 mm thick plate whose tip is 42 mm deep, at 0, 100, ..., 400 mm of displacement (0.1 s apart).
+// At 300 mm the particles with centres at x 35-65, y 25-75 and z 330-370 mm move at 60 mm/s along
+// the travel (the region in motion: 60 mm deep, 40 mm long, 40 mm wide), the rest are still.
+void writeParticleFiles(const fs::path& run_dir) {
+  const fs::path vtk = run_dir / "vtk";
+  fs::create_directories(vtk);
+  adapter::VtkSeries particles(vtk / "particles.pvd"), tool(vtk / "dem-PMMA.pvd");
+  for (int frame = 0; frame <= 4; ++frame) {
+    const double time_s = 0.1 * frame, z_tool = 0.025 + 0.1 * frame;
+    vtkio::Dataset soil;
+    soil.time_s = time_s;
+    vtkio::PointArray velocity{"velocity_m_s", 3, {}}, radius{"radius_m", 1, {}}, layer{"layer", 1, {}, vtkio::ValueType::Int32};
+    for (int k = 0; k < 40; ++k)
+      for (int j = 0; j < 8; ++j)
+        for (int i = 0; i < 10; ++i) {
+          const double x = 0.005 + 0.01 * i, y = 0.005 + 0.01 * j, z = 0.005 + 0.01 * k;
+          const bool moving = frame == 3 && x > 0.034 && x < 0.066 && y > 0.024 && z > 0.329 && z < 0.371;
+          soil.points.insert(soil.points.end(), {x, y, z});
+          velocity.values.insert(velocity.values.end(), {0.0, 0.0, moving ? 0.06 : 0.0});
+          radius.values.push_back(0.005);
+          layer.values.push_back(j < 4 ? 1 : 0);
+        }
+    soil.arrays = {velocity, radius, layer};
+    vtkio::Dataset plate;
+    plate.time_s = time_s;
+    for (const double x : {0.04, 0.06})
+      for (const double y : {0.038, 0.12})
+        for (const double z : {z_tool - 0.005, z_tool + 0.005}) plate.points.insert(plate.points.end(), {x, y, z});
+    plate.triangles = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1}, {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+    const std::string name = "frame_" + std::to_string(frame);
+    adapter::writeFileAtomically(vtk / ("particles_" + name + ".vtp"), vtkio::encode(soil, vtkio::Format::PolyData));
+    adapter::writeFileAtomically(vtk / ("dem-PMMA_" + name + ".vtp"), vtkio::encode(plate, vtkio::Format::PolyData));
+    particles.add(time_s, "particles_" + name + ".vtp");
+    tool.add(time_s, "dem-PMMA_" + name + ".vtp");
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the paper report measures Fig. 16's soil motion of a run with particle files at 300 mm, and keeps it", "[campaign][report]") {
+  TempDir dir("paper-report-soil-motion");
+  const fs::path studies = fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper";
+  writeFinishedPmma30Run(dir / "campaign");
+  const fs::path run = dir / "campaign" / "pmma_coupled_42";
+  fs::rename(dir / "campaign" / "pmma_coupled_30", run);
+  fs::copy_file(studies / "pmma_coupled_42.json", run / "study.json", fs::copy_options::overwrite_existing);
+  writeParticleFiles(run);
+  const ReportOptions options = paperReportOptions(dir / "campaign");
+  const std::vector<fs::path> files{studies / "pmma_coupled_42.json", studies / "s235_coupled_42.json"};
+  nlohmann::json first, second;
+  writeStaged(dir / "report", [&](analysis::StagedOutput& out) { first = writePaperReport(files, options, out); });
+  checkCsvMatchesJson(readText(dir / "report" / "paper-reproduction.csv"), first["cases"]);
+
+  const nlohmann::json& pmma = first["cases"][0];
+  CHECK(pmma["soil_motion_at_mm"].get<double>() == Approx(300).margin(1e-9));
+  CHECK(pmma["moving_depth_mm"].get<double>() == Approx(60).margin(1e-9));  // surface 80 mm, lowest sphere bottom 20 mm
+  CHECK(pmma["moving_length_mm"].get<double>() == Approx(40).margin(1e-9));
+  CHECK(pmma["moving_width_mm"].get<double>() == Approx(40).margin(1e-9));
+  CHECK(pmma["moving_particles"] == 4 * 6 * 4);
+  CHECK(pmma["paper_moving_depth_mm"].get<double>() == 83);  // Section 3.5
+  CHECK(pmma["moving_depth_minus_paper_mm"].get<double>() == Approx(-23).margin(1e-9));
+  // In front of the plate (x 40-60, y 38-80, z 330-340.5 mm): the centres at x 45, 55 mm, y 45-75 mm, z 335 mm.
+  CHECK(pmma["front_particles"] == 2 * 4);
+  CHECK(pmma["front_speed_min_mm_s"].get<double>() == Approx(60));
+  CHECK(pmma["front_speed_max_mm_s"].get<double>() == Approx(60));
+  CHECK(pmma["paper_front_speed_max_mm_s"].get<double>() == 100);
+  CHECK(pmma["streamline_order"].get<double>() == Approx(1.0));  // every moving particle moves along z
+  // A case without particle files has the paper's numbers and none of ours.
+  const nlohmann::json& s235 = first["cases"][1];
+  CHECK(s235["paper_moving_depth_mm"].get<double>() == 55);
+  CHECK(s235["moving_depth_mm"].is_null());
+  CHECK(s235["streamlines"].is_null());
+  checkContains(readText(dir / "report" / "paper-reproduction.md"),
+                {"## Soil motion at 300 mm, 42 mm deep", "| pmma_coupled_42 | DEM-FEM | 83 | 60 (at 300 mm) | -23 | 40-100 | 60-60 (60; 8) | 40 x 40 |",
+                 "| s235_coupled_42 | DEM-FEM | 55 | no particle files |  | 23-40 |"});
+
+  // Without the run (another machine), the kept evaluation gives the same soil motion.
+  fs::remove_all(dir / "campaign");
+  writeStaged(dir / "report", [&](analysis::StagedOutput& out) { second = writePaperReport(files, options, out); });
+  REQUIRE(second["cases"][0]["kept"] == true);
+  for (const char* key : {"moving_depth_mm", "moving_length_mm", "front_speed_median_mm_s", "front_particles", "streamline_order", "streamlines",
+                          "mean_streamline_length_mm"})
+    CHECK(second["cases"][0][key] == first["cases"][0][key]);
 }

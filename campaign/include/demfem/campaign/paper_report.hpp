@@ -4,7 +4,9 @@
 // Contract
 // - paperCases(): the one home of the numbers the paper states in its text and tables: Table 1
 //   (tool, DEM-only or DEM-FEM, depth, velocity, measurement time, computing hours on 8 cores) and
-//   Section 3's tilt ranges at 200-400 mm of tool displacement (PMMA, measured and simulated).
+//   Section 3's tilt ranges at 200-400 mm of tool displacement (PMMA, measured and simulated) and
+//   Section 3.5's soil motion at 300 mm of displacement, 42 mm deep (Fig. 16: the depth of the soil
+//   in motion and the speeds directly in front of the tool, PMMA and S235 DEM-FEM, S235 DEM).
 //   Fig. 15's means and Fig. 17's fits are given as figures only, so the report lists ours there.
 // - A case of the report is a study file; it is matched to the paper's case by its first tool's
 //   name ("S235", "PMMA"), its kind and its depth. Its run is the campaign run directory
@@ -25,6 +27,12 @@
 //   and standard deviation over 200-400 mm scaled the same way (the report compares the mean with
 //   the midpoint of the paper's range); the amplitude spectrum of the deformation over the window (of
 //   the force for a rigid tool) and its power-law fit A = a f^b over 1 Hz up to half the sample rate.
+// - Soil motion (Fig. 16): a finished run with particle files (output.vtk_every > 0: vtk/particles.pvd)
+//   is analysed at 300 mm of displacement, scaled by stroke / 600 mm, by analysis::analyseRun() with
+//   analysis::SoilMotionSettings' defaults (in motion above 5 mm/s; in front of the tool: across its
+//   width, from its tip to the surface, one largest particle diameter ahead of its front face), as
+//   `demfem soil-motion` does. A run without particle files has none; a kept evaluation of an
+//   earlier report without the key `soil_motion` has none.
 // - Wall time: the run's summed wall time (kRunRecord) and the full-scale projection: the estimate
 //   of the study file as given (estimate_wall_s), times measured / estimated of the run itself.
 // - Time step: with `convergence` (the bench's JSON, campaign/paper_convergence.hpp) its table and
@@ -32,7 +40,7 @@
 // - Output: `paper-reproduction.md`, its table `paper-reproduction.csv` (one row per case: the
 //   case, its tool, model, depth and velocities, DEM step, whether its evaluation is a kept one
 //   and the label of its runs, the run's stroke, window, window means
-//   and spreads, spectral fit, tilt range beside the paper's, wall time and the full-scale
+//   and spreads, spectral fit, tilt range beside the paper's, soil motion beside Fig. 16's, wall time and the full-scale
 //   projection beside Table 1's hours; a case not finished has its run's figures empty) and, with a
 //   renderer, plots/paper_force_curves.svg, plots/paper_deformation_curves.svg and
 //   plots/paper_spectra.svg (scripts beside them) in `out` (staged: nothing appears unless
@@ -66,12 +74,27 @@ struct PaperCase {
   study::StudyKind kind = study::StudyKind::Coupled;
   double depth_mm = 0, velocity_mm_s = 0, measurement_s = 0, hours = 0;
   std::optional<std::pair<double, double>> measured_tilt_deg, simulated_tilt_deg;  // 200-400 mm
+  // Section 3.5 at 300 mm of displacement: the depth of the soil in motion and the speed range
+  // directly in front of the tool (Fig. 16; the 42 mm cases only).
+  std::optional<double> moving_depth_mm;
+  std::optional<std::pair<double, double>> front_speed_mm_s;
 };
 
 const std::vector<PaperCase>& paperCases();
 
 // The paper's case of a study (nullptr when none matches).
 const PaperCase* paperCaseOf(const study::Study& study);
+
+// The soil motion of a run at one tool displacement (see contract; analysis/soil_motion.hpp).
+struct SoilMotionEvaluation {
+  double displacement_mm = 0;  // of the frame analysed, the nearest to the one asked for
+  double moving_depth_mm = 0, moving_length_mm = 0, moving_width_mm = 0;
+  std::size_t moving_particles = 0;
+  double front_min_mm_s = 0, front_median_mm_s = 0, front_max_mm_s = 0;
+  std::size_t front_particles = 0;
+  double streamline_order = 0, mean_streamline_length_mm = 0;  // NaN: no cell / no streamline
+  std::size_t streamlines = 0;
+};
 
 // A finished campaign run evaluated (see contract); wall_s from its kRunRecord.
 struct RunEvaluation {
@@ -83,6 +106,7 @@ struct RunEvaluation {
   std::string fit_signal;  // "deformation" or "force" (rigid tool)
   analysis::Spectrum spectrum;
   analysis::DisplacementCurve curve;
+  std::optional<SoilMotionEvaluation> soil_motion;  // a run with particle files only
   double wall_s = 0;
 };
 
@@ -90,7 +114,8 @@ struct RunEvaluation {
 // (see contract); wall_s is left 0. Throws analysis::InputError.
 RunEvaluation evaluatePaperRun(const analysis::Recording& sensors, const study::Study& run_study);
 
-// Pre: `run_dir` holds a finished run of `run_study`. Throws analysis::InputError.
+// Pre: `run_dir` holds a finished run of `run_study`; its soil motion when it has particle files.
+// Throws analysis::InputError.
 RunEvaluation evaluateCampaignRun(const std::filesystem::path& run_dir, const study::Study& run_study);
 
 struct ReportOptions {
