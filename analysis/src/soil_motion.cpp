@@ -7,10 +7,12 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 
 namespace demfem::analysis {
 
@@ -252,22 +254,78 @@ SectionMap mixingSection(const ParticleFrame& frame, double cell_m) {
   return map;
 }
 
-MovingExtent movingExtent(const ParticleFrame& frame, double threshold_m_s, double surface_y_m) {
+namespace {
+
+// The extent of the spheres `members` of `frame` (movingExtent()).
+MovingExtent extentOf(const ParticleFrame& frame, const std::vector<std::size_t>& members, double threshold_m_s, double surface_y_m) {
   MovingExtent e;
   e.threshold_m_s = threshold_m_s;
-  std::vector<double> extremes;  // lowest and highest points of every fast sphere
-  for (std::size_t i = 0; i < frame.size(); ++i) {
-    if (!(frame.speed(i) > threshold_m_s)) continue;
-    ++e.count;
+  e.count = members.size();
+  if (members.empty()) return e;
+  std::vector<double> extremes;  // lowest and highest points of every sphere
+  for (const std::size_t i : members)
     for (const double s : {-1.0, 1.0})
       for (int c = 0; c < 3; ++c) extremes.push_back(frame.position_m[3 * i + c] + s * frame.radius_m[i]);
-  }
-  if (e.count == 0) return e;
   e.region = boundsOf(extremes);
   e.depth_m = surface_y_m - e.region.lo[1];
   e.length_m = e.region.hi[2] - e.region.lo[2];
   e.width_m = e.region.hi[0] - e.region.lo[0];
   return e;
+}
+
+std::vector<std::size_t> fastParticles(const ParticleFrame& frame, double threshold_m_s) {
+  std::vector<std::size_t> fast;
+  for (std::size_t i = 0; i < frame.size(); ++i)
+    if (frame.speed(i) > threshold_m_s) fast.push_back(i);
+  return fast;
+}
+
+// The members of `fast` connected to a seed (connectedMovingExtent()), by a breadth-first search
+// over a grid of cells no smaller than the longest link (2 r_max + gap).
+std::vector<std::size_t> connectedTo(const ParticleFrame& frame, const std::vector<std::size_t>& fast, const Box& seed, double gap_m) {
+  double r_max = 0;
+  for (const std::size_t i : fast) r_max = std::max(r_max, frame.radius_m[i]);
+  const double cell = 2 * r_max + gap_m;
+  using Key = std::array<long long, 3>;
+  const auto keyOf = [&](std::size_t i) {
+    Key k;
+    for (int c = 0; c < 3; ++c) k[c] = static_cast<long long>(std::floor(frame.position_m[3 * i + c] / cell));
+    return k;
+  };
+  std::map<Key, std::vector<std::size_t>> grid;
+  for (const std::size_t i : fast) grid[keyOf(i)].push_back(i);
+  std::set<std::size_t> reached;
+  std::vector<std::size_t> queue;
+  for (const std::size_t i : fast)
+    if (seed.contains(&frame.position_m[3 * i]) && reached.insert(i).second) queue.push_back(i);
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const std::size_t i = queue[head];
+    const Key k = keyOf(i);
+    for (long long dx = -1; dx <= 1; ++dx)
+      for (long long dy = -1; dy <= 1; ++dy)
+        for (long long dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          if (it == grid.end()) continue;
+          for (const std::size_t j : it->second) {
+            if (reached.count(j)) continue;
+            const double* a = &frame.position_m[3 * i];
+            const double* b = &frame.position_m[3 * j];
+            const double d = std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+            if (d - frame.radius_m[i] - frame.radius_m[j] <= gap_m) reached.insert(j), queue.push_back(j);
+          }
+        }
+  }
+  return queue;
+}
+
+}  // namespace
+
+MovingExtent movingExtent(const ParticleFrame& frame, double threshold_m_s, double surface_y_m) {
+  return extentOf(frame, fastParticles(frame, threshold_m_s), threshold_m_s, surface_y_m);
+}
+
+MovingExtent connectedMovingExtent(const ParticleFrame& frame, double threshold_m_s, double surface_y_m, const Box& seed, double gap_m) {
+  return extentOf(frame, connectedTo(frame, fastParticles(frame, threshold_m_s), seed, gap_m), threshold_m_s, surface_y_m);
 }
 
 SpeedRange frontVelocityRange(const ParticleFrame& frame, const Box& box) {

@@ -42,7 +42,9 @@ SoilMotionInstant instantOf(const RunFrames& run, std::size_t k, const ParticleF
   const double mid_x = 0.5 * (in.tool.lo[0] + in.tool.hi[0]);
   in.vertical = velocitySection(frame, Axis::X, mid_x, s.half_thickness_m, s.cell_m);
   in.horizontal = velocitySection(frame, Axis::Y, 0.5 * (r.surface_y_m + in.tool.lo[1]), s.half_thickness_m, s.cell_m);
-  in.extent = movingExtent(frame, s.threshold_m_s, r.surface_y_m);
+  Box near_tool = in.tool;  // the particles touching the tool: its bounds grown by one largest diameter
+  for (int c = 0; c < 3; ++c) near_tool.lo[c] -= s.front_reach_m, near_tool.hi[c] += s.front_reach_m;
+  in.extent = connectedMovingExtent(frame, s.threshold_m_s, r.surface_y_m, near_tool, s.connect_gap_m);
   const Box front{{in.tool.lo[0], in.tool.lo[1], in.tool.hi[2]}, {in.tool.hi[0], r.surface_y_m, in.tool.hi[2] + s.front_reach_m}};
   in.front = frontVelocityRange(frame, front);
   in.mixing = mixingIndex(frame, s.mixing_cell_m, r.boundaries_y_m);
@@ -225,7 +227,7 @@ std::string soilMotionMarkdown(const std::vector<SoilMotionRun>& runs, const Soi
   std::ostringstream md;
   md << "## Soil motion\n\n"
      << "Region in motion: particles faster than " << s.threshold_m_s * 1e3
-     << " mm/s, its depth below the surface, length and width (Section 3.5); speeds directly in front of the tool (within "
+     << " mm/s connected to the tool (linked across gaps up to " << mm(s.connect_gap_m) << " mm), its depth below the surface, length and width (Section 3.5); speeds directly in front of the tool (within "
      << mm(s.front_reach_m) << " mm of its front face, across its width, from its tip to the surface); layer mixing = label entropy per "
      << mm(s.mixing_cell_m) << " mm cell over the entropy of all labels (0 untouched, 1 fully mixed).\n\n"
      << "| run | displacement (mm) | moving depth (mm) | length (mm) | width (mm) | speed in front (mm/s) | mixing |\n"

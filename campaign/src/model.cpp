@@ -97,10 +97,12 @@ analysis::Recording draughtRun(const study::Study& study) {
 
 analysis::Recording SoilBinModel::run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) {
   prepareSoil(study);
+  study::Study run_study = study;
+  run_study.output.directory = scratch;  // the DEM's files (output.vtk_every > 0) in this run's directory, not a shared one
   analysis::Recording recording;
   switch (force_) {
-    case SoilForce::LoadCell: recording = loadCellRun(study, scratch); break;
-    case SoilForce::Draught: recording = draughtRun(study); break;
+    case SoilForce::LoadCell: recording = loadCellRun(run_study, scratch); break;
+    case SoilForce::Draught: recording = draughtRun(run_study); break;
   }
   recording.key = key;
   return recording;
@@ -127,7 +129,7 @@ void SoilBinModel::prepareSoil(const study::Study& s) const {
     if (packing_)
       relabelPacking(s, file);
     else
-      builtin::makeBackend(s);  // deposits the soil and writes its file (backend.hpp)
+      builtin::ensureSettledSoil(s);
   }
   const std::string message = adapter::unsettledSoilMessage(file, adapter::readSettledSoil(file, s).settling);
   if (!message.empty() && !allow_unsettled_soil_) throw ArgumentError("study '" + s.name + "': " + message);
@@ -144,7 +146,7 @@ void SoilBinModel::relabelPacking(const study::Study& s, const std::filesystem::
     throw ArgumentError("shared soil packing: study '" + s.name + "' changes the bin, fill height or particle sizes of '" + reference.name +
                         "', whose deposition it would reuse");
   const auto reference_file = adapter::settledSoilFile(reference, dir);
-  if (!std::filesystem::exists(reference_file)) builtin::makeBackend(reference);  // deposits and writes it
+  if (!std::filesystem::exists(reference_file)) builtin::ensureSettledSoil(reference);
   adapter::SettledSoil soil = adapter::readSettledSoil(reference_file, reference);
   soil.soil_hash = study::soilHash(s);
   for (auto& p : soil.particles) p.layer = builtin::layerAt(s.soil, p.x_m[1]);

@@ -93,7 +93,7 @@ void depositSoils(const std::vector<Case>& cases, const CampaignOptions& o) {
     if (c.status.state == CaseState::Done || !done.insert(study::soilHash(c.study)).second) continue;
     const fs::path file = adapter::settledSoilFile(c.study, adapter::defaultSoilDirectory());
     if (!fs::exists(file))
-      builtin::makeBackend(c.study, [&](double fraction, const std::string& stage_line) {  // deposits and writes it (builtin/backend.hpp)
+      builtin::ensureSettledSoil(c.study, [&](double fraction, const std::string& stage_line) {
         if (o.on_deposit) o.on_deposit(c.status.name, fraction, stage_line);
       });
     const std::string message = adapter::unsettledSoilMessage(file, adapter::readSettledSoil(file, c.study).settling);
@@ -154,8 +154,10 @@ class Runner {
       c.started = Clock::now();
     }
     try {
-      fem::CoupledDriver driver(c.study, run);
-      CheckpointsInDirectory dem(builtin::makeBackend(c.study), c.status.run_dir / "checkpoint");
+      study::Study run_study = c.study;
+      run_study.output.directory = c.status.run_dir;  // the DEM's particle and tool files beside the FEM's, in the run directory
+      fem::CoupledDriver driver(run_study, run);
+      CheckpointsInDirectory dem(builtin::makeBackend(run_study), c.status.run_dir / "checkpoint");
       const fem::CoupledRunSummary s = driver.run(dem);
       const std::lock_guard lock(mutex_);
       c.status.state = s.complete ? CaseState::Done : CaseState::Incomplete;

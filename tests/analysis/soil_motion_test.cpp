@@ -58,6 +58,43 @@ TEST_CASE("the extent of a synthetic field with a known moving box is exact", "[
   CHECK(inside.min_m_s == Approx(0.030));
 }
 
+TEST_CASE("the region in motion connected to the tool leaves out fast particles that do not touch it", "[analysis]") {
+  ParticleFrame f = lattice(20, 8, 40, 1);
+  // The moving box of the case above (centres x 65..125, y 25..75, z 105..245 mm) at 30 mm/s, and two
+  // lone fast particles: one at (5, 75, 395) mm, far from it, and one at (145, 55, 165) mm, one empty
+  // lattice site (a 10 mm surface gap) beyond the box's side.
+  const auto at = [&](double x, double y, double z) {
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (std::fabs(f.position_m[3 * i] - x) < 1e-9 && std::fabs(f.position_m[3 * i + 1] - y) < 1e-9 && std::fabs(f.position_m[3 * i + 2] - z) < 1e-9)
+        return i;
+    FAIL("no lattice site there");
+    return std::size_t{0};
+  };
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const double* p = &f.position_m[3 * i];
+    const bool inside = p[0] > 0.059 && p[0] < 0.131 && p[1] > 0.024 && p[1] < 0.076 && p[2] > 0.104 && p[2] < 0.246;
+    f.velocity_m_s[3 * i + 2] = inside ? 0.030 : 0.001;
+  }
+  f.velocity_m_s[3 * at(0.005, 0.075, 0.395) + 2] = 0.030;
+  f.velocity_m_s[3 * at(0.145, 0.055, 0.165) + 2] = 0.030;
+  const Box tool{{0.08, 0.05, 0.245}, {0.11, 0.12, 0.255}};  // its front face against the box's at z 245-250 mm
+  Box seed = tool;
+  for (int c = 0; c < 3; ++c) seed.lo[c] -= 0.0105, seed.hi[c] += 0.0105;
+
+  const auto all = movingExtent(f, 0.010, 0.080);
+  CHECK(all.count == 7u * 6 * 15 + 2);
+  CHECK(all.length_m == Approx(0.300).epsilon(1e-12));  // z 100..400 mm: out to the lone particle at 395 mm
+  const auto connected = connectedMovingExtent(f, 0.010, 0.080, seed, 0.001);
+  CHECK(connected.count == 7u * 6 * 15);  // the box alone: the particle 10 mm beyond its side is not linked
+  CHECK(connected.depth_m == Approx(0.060).epsilon(1e-12));
+  CHECK(connected.length_m == Approx(0.150).epsilon(1e-12));
+  CHECK(connected.width_m == Approx(0.070).epsilon(1e-12));
+  // A gap of 10 mm links the near particle (the far one stays out); nothing fast near the tool: none.
+  CHECK(connectedMovingExtent(f, 0.010, 0.080, seed, 0.0101).count == 7u * 6 * 15 + 1);
+  const Box elsewhere{{0.0, 0.0, 0.30}, {0.05, 0.05, 0.35}};
+  CHECK(connectedMovingExtent(f, 0.010, 0.080, elsewhere, 0.001).count == 0);
+}
+
 TEST_CASE("a vertical velocity section bins the mean speed of the particles on the plane", "[analysis]") {
   ParticleFrame f = lattice(4, 3, 5, 1);
   for (std::size_t i = 0; i < f.size(); ++i) f.velocity_m_s[3 * i] = f.position_m[3 * i + 2];  // |v| = z (per s)

@@ -11,11 +11,14 @@ using namespace demfem::testing;
 
 namespace {
 
-// studies/quick.json made cheap (fastQuickStudy) with a 15 mm stroke: about 450 FEM steps.
+// studies/quick.json made cheap (fastQuickStudy) with a 15 mm stroke: about 450 FEM steps, ParaView
+// files every 50 steps, the study's own output directory dir/elsewhere (a campaign does not use it).
 fs::path shortCase(const fs::path& dir) {
   nlohmann::json study = nlohmann::json::parse(readText(fastQuickStudy(dir)));
   study["tools"][0]["motion"]["stroke_mm"] = 15;
   study["dem"]["threads"] = 1;
+  study["output"]["vtk_every"] = 50;
+  study["output"]["directory"] = (dir / "elsewhere").string();
   const fs::path file = dir / "pmma_short.json";
   std::ofstream(file) << study.dump(2);
   return file;
@@ -60,6 +63,11 @@ TEST_CASE("demfem campaign resumes an interrupted case from its checkpoint, skip
   Process straight(campaign(dir / "straight", "straight"), dir / "straight");
   REQUIRE(exitedOk(straight.wait(300s)));
   CHECK(readText(run_dir / "sensors.csv") == readText(dir / "straight" / "pmma_short" / "sensors.csv"));
+  // Every file of the run in its run directory, the DEM's beside the FEM's, the resumed series the
+  // uninterrupted one.
+  for (const char* series : {"particles.pvd", "dem-PMMA.pvd", "fem-PMMA.pvd"})
+    CHECK(readText(run_dir / "vtk" / series) == readText(dir / "straight" / "pmma_short" / "vtk" / series));
+  CHECK_FALSE(fs::exists(dir / "elsewhere"));
 
   Process report({app("demfem"), "campaign", study.string(), "--dir", runs.string(), "--report", (dir / "report").string(), "--json",
                   (dir / "report.json").string()},
@@ -73,6 +81,11 @@ TEST_CASE("demfem campaign resumes an interrupted case from its checkpoint, skip
   // The soil pushes against the travel: a positive load-cell force, and a spectrum that falls off.
   CHECK(reported["force_mean_N"].get<double>() > 0);
   CHECK(reported["fit_b"].get<double>() < 0);
+  // Fig. 16's measures from the particle files, at 300 mm scaled by the stroke (15 / 600 mm): the
+  // frame nearest 7.5 mm, soil in motion in front of the tool.
+  CHECK(reported["soil_motion_at_mm"].get<double>() == Approx(7.5).margin(1.0));
+  CHECK(reported["moving_depth_mm"].get<double>() > 0);
+  CHECK(reported["front_particles"].get<int>() > 0);
   const std::string md = readText(dir / "report" / "paper-reproduction.md");
   CHECK(md.find("| pmma_short | PMMA | DEM-FEM | 18 |") != std::string::npos);
   CHECK(md.find("| 46 |") != std::string::npos);  // Table 1's hours of the PMMA 18 mm case beside ours

@@ -257,21 +257,13 @@ TriangleMesh toolMesh(const study::Tool& tool) {
   return mesh;
 }
 
-std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress) {
+namespace {
+
+// `make` with the errors of the coupling API (backend.hpp).
+template <class Make>
+auto asCouplingErrors(Make&& make) {
   try {
-    const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
-    if (!std::filesystem::exists(file)) {
-      if (study.soil.deposition_backend != capabilities().name)
-        throw CouplingError(ErrorCode::BadRequest,
-                            "builtin DEM: no settled soil " + file.string() + "; the study deposits it with " +
-                                study.soil.deposition_backend +
-                                " (/soil/deposition/backend): run `demfem deposit` on the study first");
-      DepositReport report;
-      adapter::writeSettledSoil(file, depositSoil(study, study.dem.threads, report, deposit_progress));
-    }
-    const adapter::SettledSoil soil = adapter::readSettledSoil(file, study);
-    return std::make_unique<BuiltinBackend>(study, soil,
-                                            adapter::soilRecordJson(soil, file, adapter::settledSoilChecksum(file)));
+    return make();
   } catch (const CouplingError&) {
     throw;
   } catch (const BlowUp& e) {
@@ -279,6 +271,33 @@ std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, con
   } catch (const std::exception& e) {
     throw CouplingError(ErrorCode::BadRequest, e.what());
   }
+}
+
+std::filesystem::path settledSoilOf(const study::Study& study, const DepositProgress& deposit_progress) {
+  const auto file = adapter::settledSoilFile(study, adapter::defaultSoilDirectory());
+  if (!std::filesystem::exists(file)) {
+    if (study.soil.deposition_backend != capabilities().name)
+      throw CouplingError(ErrorCode::BadRequest,
+                          "builtin DEM: no settled soil " + file.string() + "; the study deposits it with " + study.soil.deposition_backend +
+                              " (/soil/deposition/backend): run `demfem deposit` on the study first");
+    DepositReport report;
+    adapter::writeSettledSoil(file, depositSoil(study, study.dem.threads, report, deposit_progress));
+  }
+  return file;
+}
+
+}  // namespace
+
+std::filesystem::path ensureSettledSoil(const study::Study& study, const DepositProgress& deposit_progress) {
+  return asCouplingErrors([&] { return settledSoilOf(study, deposit_progress); });
+}
+
+std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress) {
+  return asCouplingErrors([&]() -> std::unique_ptr<adapter::CouplingApi> {
+    const auto file = settledSoilOf(study, deposit_progress);
+    const adapter::SettledSoil soil = adapter::readSettledSoil(file, study);
+    return std::make_unique<BuiltinBackend>(study, soil, adapter::soilRecordJson(soil, file, adapter::settledSoilChecksum(file)));
+  });
 }
 
 }  // namespace demfem::builtin

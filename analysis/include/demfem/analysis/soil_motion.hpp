@@ -36,8 +36,12 @@
 //   streamline: count 0 and NaN for the rest (no motion is not a length of zero).
 // - movingExtent(): the region of the particles faster than `threshold` (|v| > threshold), as the
 //   union of their spheres: depth below `surface_y` of its lowest point, its length along z and its
-//   width along x (the paper's 83 mm against 55-58 mm is this depth). No fast particle: count 0 and
-//   zero sizes.
+//   width along x. No fast particle: count 0 and zero sizes.
+// - connectedMovingExtent(): movingExtent() of the fast particles connected to `seed`: those whose
+//   centre lies in the box and every fast particle reached from them through fast particles whose
+//   spheres are at most `gap_m` apart (surface to surface). With `seed` the tool's bounds grown by a
+//   particle diameter this is the assembly the tool sets in motion, not a lone fast particle
+//   elsewhere in the bin (the paper's 83 mm against 55-58 mm is its depth).
 // - frontVelocityRange(): speeds of the particles whose centre lies in `box` (in front of the tool:
 //   across its width, from its tip to the surface, within reach of its front face). No particle:
 //   count 0.
@@ -144,6 +148,7 @@ struct MovingExtent {
 };
 
 MovingExtent movingExtent(const ParticleFrame& frame, double threshold_m_s, double surface_y_m);
+MovingExtent connectedMovingExtent(const ParticleFrame& frame, double threshold_m_s, double surface_y_m, const Box& seed, double gap_m);
 
 struct SpeedRange {
   std::size_t count = 0;

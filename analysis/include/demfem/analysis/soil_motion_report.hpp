@@ -5,8 +5,9 @@
 // - analyseRun(): for every requested tool displacement, the particle frame whose toolDisplacement()
 //   is nearest (InputError when the run's displacements miss it by more than half the largest step
 //   between consecutive frames, or the run has fewer than two frames): the vertical section through the tool's centre
-//   (x = mid of its bounds), one horizontal section at half the tool's tip depth, the moving extent
-//   above `threshold_m_s`, the speed range in front of the tool (across its width, from its tip up to
+//   (x = mid of its bounds), one horizontal section at half the tool's tip depth, the extent
+//   of the region in motion (connectedMovingExtent() above `threshold_m_s` from the particles within
+//   `front_reach_m` of the tool's bounds, linked across gaps up to `connect_gap_m`), the speed range in front of the tool (across its width, from its tip up to
 //   the surface, from its front face to `front_reach_m` ahead) and the mixing index; the mixing of the
 //   first frame (before) and of the last (after the tool passed); on the vertical section's plane and
 //   thickness, the flow section in cells of `flow_cell_m`, its alignment order and its streamlines
@@ -46,6 +47,7 @@ struct SoilMotionSettings {
   double cell_m = 0.01;                 // map cells (one particle diameter of the paper's soil)
   double half_thickness_m = 0.005;      // sections: centres within this of the plane
   double front_reach_m = 0.0105;        // ahead of the front face (one largest diameter)
+  double connect_gap_m = 0.001;         // the region in motion: fast spheres at most this apart (a tenth of that diameter)
   double mixing_cell_m = 0.02;
   double flow_cell_m = 0.02;            // flow sections (two diameters: about 5 particles per cell on the section)
   StreamlineRules streamlines;

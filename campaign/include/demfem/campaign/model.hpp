@@ -21,6 +21,8 @@
 //   needs the baseline before the step).
 // - SoilBinModel (kind coupled or dem-only) against the built-in DEM backend in-process, with the
 //   force of SoilForce:
+//   The DEM's files (output.vtk_every > 0) go to the run's scratch directory too, never to the
+//   study's output.directory, which concurrent runs of one study would share.
 //   * LoadCell: one coupled run (fem::CoupledDriver, Fig. 3), outputs in a scratch directory, its
 //     sensors.csv read back (force_N = the load cell; a rigid tool's static split of the soil forces);
 //   * Draught: a rigid tool only (kind dem-only or fem.deformable false): the DEM alone drives the

@@ -6,7 +6,9 @@
 //   stem, its run directory `directory / name`. Two study files of one stem are an ArgumentError.
 // - Run directory: `study.json` (the effective study the case runs, written before it starts),
 //   `campaign_case.json` (kRunRecord: wall time summed over every call that ran it, calls, estimate),
-//   the coupled run's outputs (fem/coupled_driver.hpp: sensors.csv, sensors.json, ...), and
+//   the coupled run's outputs (fem/coupled_driver.hpp: sensors.csv, sensors.json, ...), the DEM's
+//   ParaView files with the FEM's in `vtk/` (output.vtk_every > 0; the study's output.directory is
+//   not used), and
 //   `checkpoint/` (the FEM state and the built-in DEM's checkpoint of the same step, every
 //   `checkpoint_every` FEM steps).
 // - Resume: a case whose sensors.json says "complete": true is done and not rerun; one with a

@@ -8,6 +8,7 @@
 #include "demfem/study/contact_laws.hpp"
 #include "demfem/study/study.hpp"
 
+#include <filesystem>
 #include <iterator>
 #include <memory>
 
@@ -32,6 +33,11 @@ inline study::BackendCapabilities capabilities() {
 // adapter::CouplingError on a study this backend cannot run or a damaged or foreign soil file
 // (BadRequest naming it).
 std::unique_ptr<adapter::CouplingApi> makeBackend(const study::Study& study, const DepositProgress& deposit_progress = {});
+
+// The study's settled-soil file, deposited and written here when missing, as makeBackend() does, but
+// without building the simulation: no tools, no ParaView files (output.vtk_every is not looked at).
+// Throws as makeBackend().
+std::filesystem::path ensureSettledSoil(const study::Study& study, const DepositProgress& deposit_progress = {});
 
 // The DEM mesh of a tool: its keypoint surface (adapter/tool_surface.hpp: the plate's triangulation
 // shared with the FEM, or the cone penetrometer), local frame, material not yet set. Throws
