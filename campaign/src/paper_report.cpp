@@ -485,7 +485,8 @@ std::string soilMotionIntroduction() {
   const analysis::SoilMotionSettings s;
   return "From the particle files of runs with `output.vtk_every` > 0, by `demfem soil-motion`'s measures and defaults, at the "
          "frame nearest to the displacement: in motion is faster than " + formatted("%g", s.threshold_m_s * 1e3) +
-         " mm/s (the paper does not state its threshold); the depth is the lowest point of the moving particles below the "
+         " mm/s (the paper does not state its threshold); the region in motion is the fast particles connected to the tool "
+         "(linked across gaps up to " + formatted("%g", s.connect_gap_m * 1e3) + " mm), its depth the lowest point of that region below the "
          "surface; the speeds are those of the particles directly in front of the tool (across its width, from its tip to the "
          "surface, " + formatted("%g", s.front_reach_m * 1e3) + " mm ahead of its front face); the streamline order is the "
          "alignment of the moving particles' directions on the vertical section through the tool (1: all parallel).\n\n";
