@@ -195,7 +195,7 @@ std::string GnuplotRenderer::script(const Figure& figure, ImageFormat format) co
         out << "\n";
       }
     } else if (const auto* map = std::get_if<MapPanel>(&figure.panels[p])) {
-      out << "set key top right opaque\nset title " << quoted(map->title) << "\nset xlabel " << quoted(map->x_label) << "\nset ylabel "
+      out << "set key below\nset title " << quoted(map->title) << "\nset xlabel " << quoted(map->x_label) << "\nset ylabel "
           << quoted(map->y_label) << "\nset cblabel " << quoted(map->value_label) << "\n";
       out << "set size ratio -1\nset palette rgbformulae 33,13,10\nset xrange [" << map->x0 << ":" << map->x0 + map->nx * map->dx
           << "]\nset yrange [" << map->y0 << ":" << map->y0 + map->ny * map->dy << "]\n";

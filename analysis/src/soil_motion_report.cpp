@@ -95,38 +95,6 @@ std::string mm(double metres) {
   return out.str();
 }
 
-Figure sectionsFigure(const std::vector<SoilMotionRun>& runs, bool vertical) {
-  Figure f;
-  f.title = vertical ? "Particle speed on the vertical section through the tool (Fig. 16)" : "Particle speed on a horizontal section at half the tool depth";
-  f.columns = static_cast<int>(runs.size());
-  std::size_t rows = 0;
-  for (const auto& r : runs) rows = std::max(rows, r.instants.size());
-  for (std::size_t i = 0; i < rows; ++i)
-    for (const auto& r : runs) {
-      if (i >= r.instants.size()) {
-        f.panels.push_back(XYPanel{r.name + ": no frame", "", "", false, false, {}, "top left"});
-        continue;
-      }
-      const auto& in = r.instants[i];
-      const std::string title = r.name + " at " + mm(in.displacement_m) + " mm";
-      MapPanel p = mapPanel(vertical ? in.vertical : in.horizontal, title, vertical ? "y up (mm)" : "x across the bin (mm)", "speed (mm/s)", 1e3);
-      const int v = vertical ? 1 : 0;
-      if (in.extent.count)
-        p.overlays.push_back(outline("moving > threshold", in.extent.region.lo[2] * 1e3, in.extent.region.hi[2] * 1e3,
-                                     in.extent.region.lo[v] * 1e3, in.extent.region.hi[v] * 1e3, "#000000"));
-      if (vertical)
-        for (std::size_t l = 0; l < in.streamlines.size(); ++l)
-          p.overlays.push_back({l == 0 ? "streamlines" : "", millimetres(in.streamlines[l].u_m), millimetres(in.streamlines[l].v_m), "#303030",
-                                SeriesStyle::Line, 0.8, {}});
-      p.overlays.push_back(outline("tool", in.tool.lo[2] * 1e3, in.tool.hi[2] * 1e3, in.tool.lo[v] * 1e3,
-                                   std::min(in.tool.hi[v], vertical ? r.surface_y_m : in.tool.hi[v]) * 1e3, "#ffffff"));
-      f.panels.push_back(p);
-    }
-  f.row_height_px = 300;
-  f.width_px = 640 * static_cast<int>(std::max<std::size_t>(1, runs.size()));
-  return f;
-}
-
 Figure mixingFigure(const std::vector<SoilMotionRun>& runs) {
   Figure f;
   f.title = "Layer mixing (label entropy per cell / entropy of all labels)";
@@ -169,6 +137,38 @@ void streamlineTable(std::ostream& md, const std::vector<SoilMotionRun>& runs, c
 }
 
 }  // namespace
+
+Figure sectionsFigure(const std::vector<SoilMotionRun>& runs, bool vertical) {
+  Figure f;
+  f.title = vertical ? "Particle speed on the vertical section through the tool (Fig. 16)" : "Particle speed on a horizontal section at half the tool depth";
+  f.columns = static_cast<int>(runs.size());
+  std::size_t rows = 0;
+  for (const auto& r : runs) rows = std::max(rows, r.instants.size());
+  for (std::size_t i = 0; i < rows; ++i)
+    for (const auto& r : runs) {
+      if (i >= r.instants.size()) {
+        f.panels.push_back(XYPanel{r.name + ": no frame", "", "", false, false, {}, "top left"});
+        continue;
+      }
+      const auto& in = r.instants[i];
+      const std::string title = r.name + " at " + mm(in.displacement_m) + " mm";
+      MapPanel p = mapPanel(vertical ? in.vertical : in.horizontal, title, vertical ? "y up (mm)" : "x across the bin (mm)", "speed (mm/s)", 1e3);
+      const int v = vertical ? 1 : 0;
+      if (in.extent.count)
+        p.overlays.push_back(outline("moving > threshold", in.extent.region.lo[2] * 1e3, in.extent.region.hi[2] * 1e3,
+                                     in.extent.region.lo[v] * 1e3, in.extent.region.hi[v] * 1e3, "#000000"));
+      if (vertical)
+        for (std::size_t l = 0; l < in.streamlines.size(); ++l)
+          p.overlays.push_back({l == 0 ? "streamlines" : "", millimetres(in.streamlines[l].u_m), millimetres(in.streamlines[l].v_m), "#303030",
+                                SeriesStyle::Line, 0.8, {}});
+      p.overlays.push_back(outline("tool", in.tool.lo[2] * 1e3, in.tool.hi[2] * 1e3, in.tool.lo[v] * 1e3,
+                                   std::min(in.tool.hi[v], vertical ? r.surface_y_m : in.tool.hi[v]) * 1e3, "#ffffff"));
+      f.panels.push_back(p);
+    }
+  f.row_height_px = 300;
+  f.width_px = 640 * static_cast<int>(std::max<std::size_t>(1, runs.size()));
+  return f;
+}
 
 SoilMotionRun analyseRun(const std::filesystem::path& run_dir, const SoilMotionSettings& s) {
   const RunFrames run = loadRun(run_dir, s.tool);

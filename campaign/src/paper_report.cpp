@@ -127,14 +127,63 @@ nlohmann::json roundedArray(const std::vector<double>& v) {
 nlohmann::json orNull(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
 double numberOrNaN(const nlohmann::json& j) { return j.is_null() ? std::numeric_limits<double>::quiet_NaN() : j.get<double>(); }
 
+nlohmann::json roundedOrNull(const std::vector<double>& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (double x : v) a.push_back(std::isnan(x) ? nlohmann::json(nullptr) : nlohmann::json(rounded(x)));
+  return a;
+}
+
+std::vector<double> numbersOrNaN(const nlohmann::json& a) {
+  std::vector<double> v;
+  for (const nlohmann::json& x : a) v.push_back(numberOrNaN(x));
+  return v;
+}
+
+nlohmann::json boxJson(const analysis::Box& b) { return {{"lo", b.lo}, {"hi", b.hi}}; }
+analysis::Box boxOf(const nlohmann::json& j) { return {j.at("lo").get<std::array<double, 3>>(), j.at("hi").get<std::array<double, 3>>()}; }
+
+// The plot's part of a kept soil motion (SoilMotionEvaluation).
+nlohmann::json soilMotionPlotJson(const SoilMotionEvaluation& m) {
+  const analysis::SectionMap& v = m.vertical;
+  nlohmann::json paths = nlohmann::json::array();
+  for (const analysis::Streamline& l : m.streamline_paths) paths.push_back({{"u_m", roundedArray(l.u_m)}, {"v_m", roundedArray(l.v_m)}});
+  return {{"vertical",
+           {{"position_m", v.position_m}, {"half_thickness_m", v.half_thickness_m}, {"cell_m", v.cell_m}, {"u0_m", v.u0_m},
+            {"v0_m", v.v0_m}, {"nu", v.nu}, {"nv", v.nv}, {"speed_m_s", roundedOrNull(v.values)}}},
+          {"region", boxJson(m.region)},
+          {"tool", boxJson(m.tool)},
+          {"surface_y_m", m.surface_y_m},
+          {"streamline_paths", paths}};
+}
+
+void readSoilMotionPlot(const nlohmann::json& j, SoilMotionEvaluation& m) {
+  const nlohmann::json& v = j.at("vertical");
+  m.vertical.axis = analysis::Axis::X;
+  m.vertical.position_m = v.at("position_m"), m.vertical.half_thickness_m = v.at("half_thickness_m"), m.vertical.cell_m = v.at("cell_m");
+  m.vertical.u0_m = v.at("u0_m"), m.vertical.v0_m = v.at("v0_m"), m.vertical.nu = v.at("nu"), m.vertical.nv = v.at("nv");
+  m.vertical.values = numbersOrNaN(v.at("speed_m_s"));
+  if (m.vertical.values.size() != static_cast<std::size_t>(m.vertical.nu) * static_cast<std::size_t>(m.vertical.nv))
+    throw std::invalid_argument("/soil_motion/vertical/speed_m_s: not nu x nv values");
+  m.region = boxOf(j.at("region")), m.tool = boxOf(j.at("tool")), m.surface_y_m = j.at("surface_y_m");
+  for (const nlohmann::json& l : j.at("streamline_paths")) {
+    analysis::Streamline line;
+    line.u_m = l.at("u_m").get<std::vector<double>>();
+    line.v_m = l.at("v_m").get<std::vector<double>>();
+    if (line.u_m.size() != line.v_m.size()) throw std::invalid_argument("/soil_motion/streamline_paths: u_m and v_m of different lengths");
+    m.streamline_paths.push_back(std::move(line));
+  }
+}
+
 nlohmann::json soilMotionJson(const std::optional<SoilMotionEvaluation>& m) {
   if (!m) return nullptr;
-  return {{"displacement_mm", m->displacement_mm},     {"moving_depth_mm", m->moving_depth_mm},
+  nlohmann::json j = soilMotionPlotJson(*m);
+  j.update(nlohmann::json{{"displacement_mm", m->displacement_mm},     {"moving_depth_mm", m->moving_depth_mm},
           {"moving_length_mm", m->moving_length_mm},   {"moving_width_mm", m->moving_width_mm},
           {"moving_particles", m->moving_particles},   {"front_min_mm_s", m->front_min_mm_s},
           {"front_median_mm_s", m->front_median_mm_s}, {"front_max_mm_s", m->front_max_mm_s},
           {"front_particles", m->front_particles},     {"streamline_order", orNull(m->streamline_order)},
-          {"mean_streamline_length_mm", orNull(m->mean_streamline_length_mm)}, {"streamlines", m->streamlines}};
+          {"mean_streamline_length_mm", orNull(m->mean_streamline_length_mm)}, {"streamlines", m->streamlines}});
+  return j;
 }
 
 std::optional<SoilMotionEvaluation> soilMotionOf(const nlohmann::json& j) {
@@ -146,6 +195,7 @@ std::optional<SoilMotionEvaluation> soilMotionOf(const nlohmann::json& j) {
   m.front_median_mm_s = j.at("front_median_mm_s"), m.front_max_mm_s = j.at("front_max_mm_s");
   m.front_particles = j.at("front_particles"), m.streamline_order = numberOrNaN(j.at("streamline_order"));
   m.mean_streamline_length_mm = numberOrNaN(j.at("mean_streamline_length_mm")), m.streamlines = j.at("streamlines");
+  readSoilMotionPlot(j, m);
   return m;
 }
 
@@ -582,6 +632,34 @@ analysis::Figure spectraFigure(const std::vector<ReportCase>& cases) {
   return f;
 }
 
+// The vertical velocity sections of the cases with soil motion, as `demfem soil-motion` draws them,
+// from the kept form (the same figure from the runs and from kept evaluations).
+analysis::Figure soilMotionFigure(const std::vector<ReportCase>& cases) {
+  std::vector<analysis::SoilMotionRun> runs;
+  for (const ReportCase& c : cases) {
+    if (!c.run || !c.run->soil_motion) continue;
+    const SoilMotionEvaluation& m = *c.run->soil_motion;
+    analysis::SoilMotionRun r;
+    r.name = c.name;
+    r.surface_y_m = m.surface_y_m;
+    analysis::SoilMotionInstant in;
+    in.displacement_m = m.displacement_mm * 1e-3;
+    in.vertical = m.vertical;
+    in.tool = m.tool;
+    in.extent.count = m.moving_particles;
+    in.extent.region = m.region;
+    in.streamlines = m.streamline_paths;
+    r.instants.push_back(std::move(in));
+    runs.push_back(std::move(r));
+  }
+  if (runs.empty()) return {};
+  analysis::Figure f = analysis::sectionsFigure(runs, true);
+  f.columns = 1;  // the bin is 650 x 85 mm: one wide panel per case
+  f.width_px = 1400;
+  f.row_height_px = 330;
+  return f;
+}
+
 // Renders `figure` to plots/NAME.svg (script beside it); the Markdown image line.
 std::string plotFile(analysis::StagedOutput& out, const analysis::GnuplotRenderer& renderer, const std::string& name,
                      const analysis::Figure& figure) {
@@ -666,6 +744,9 @@ SoilMotionEvaluation soilMotionAt(const fs::path& run_dir, double stroke_mm) {
   m.streamline_order = in.order.order;
   m.mean_streamline_length_mm = in.streamline_statistics.mean_length_m * 1e3;
   m.streamlines = in.streamline_statistics.count;
+  m.vertical = in.vertical;
+  m.region = in.extent.region, m.tool = in.tool, m.surface_y_m = run.surface_y_m;
+  m.streamline_paths = in.streamlines;
   return m;
 }
 
@@ -716,7 +797,8 @@ nlohmann::json writePaperReport(const std::vector<fs::path>& study_files, const 
     md << "## Figures\n\n"
        << plotFile(out, *o.renderer, "paper_force_curves", curvesFigure(cases, true))
        << plotFile(out, *o.renderer, "paper_deformation_curves", curvesFigure(cases, false))
-       << plotFile(out, *o.renderer, "paper_spectra", spectraFigure(cases));
+       << plotFile(out, *o.renderer, "paper_spectra", spectraFigure(cases))
+       << plotFile(out, *o.renderer, "paper_soil_motion", soilMotionFigure(cases));
   }
   out.writeText("paper-reproduction.md", md.str());
   out.writeText("paper-reproduction.csv", caseSection().csv(caseRows(cases)));

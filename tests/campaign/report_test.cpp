@@ -373,7 +373,9 @@ TEST_CASE("the paper report measures Fig. 16's soil motion of a run with particl
   fs::rename(dir / "campaign" / "pmma_coupled_30", run);
   fs::copy_file(studies / "pmma_coupled_42.json", run / "study.json", fs::copy_options::overwrite_existing);
   writeParticleFiles(run);
-  const ReportOptions options = paperReportOptions(dir / "campaign");
+  ReportOptions options = paperReportOptions(dir / "campaign");
+  const analysis::GnuplotRenderer renderer;
+  options.renderer = &renderer;
   const std::vector<fs::path> files{studies / "pmma_coupled_42.json", studies / "s235_coupled_42.json"};
   nlohmann::json first, second;
   writeStaged(dir / "report", [&](analysis::StagedOutput& out) { first = writePaperReport(files, options, out); });
@@ -402,11 +404,17 @@ TEST_CASE("the paper report measures Fig. 16's soil motion of a run with particl
                 {"## Soil motion at 300 mm, 42 mm deep", "| pmma_coupled_42 | DEM-FEM | 83 | 60 (at 300 mm) | -23 | 40-100 | 60-60 (60; 8) | 40 x 40 |",
                  "| s235_coupled_42 | DEM-FEM | 55 | no particle files |  | 23-40 |"});
 
-  // Without the run (another machine), the kept evaluation gives the same soil motion.
+  const std::string kept_first = readText(dir / "report" / "paper-runs" / "pmma_coupled_42.json");
+  const std::string plot_first = readText(dir / "report" / "plots" / "paper_soil_motion.gp");
+  CHECK(plot_first.find("pmma_coupled_42 at 300.0 mm") != std::string::npos);
+
+  // Without the run (another machine), the kept evaluation gives the same soil motion and plot.
   fs::remove_all(dir / "campaign");
   writeStaged(dir / "report", [&](analysis::StagedOutput& out) { second = writePaperReport(files, options, out); });
   REQUIRE(second["cases"][0]["kept"] == true);
   for (const char* key : {"moving_depth_mm", "moving_length_mm", "front_speed_median_mm_s", "front_particles", "streamline_order", "streamlines",
                           "mean_streamline_length_mm"})
     CHECK(second["cases"][0][key] == first["cases"][0][key]);
+  CHECK(readText(dir / "report" / "paper-runs" / "pmma_coupled_42.json") == kept_first);
+  CHECK(readText(dir / "report" / "plots" / "paper_soil_motion.gp") == plot_first);
 }

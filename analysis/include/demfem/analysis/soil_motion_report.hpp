@@ -84,4 +84,10 @@ std::string soilMotionMarkdown(const std::vector<SoilMotionRun>& runs, const Soi
 void writeSoilMotionOutputs(StagedOutput& out, const std::vector<SoilMotionRun>& runs, const SoilMotionSettings& settings,
                             const GnuplotRenderer* renderer);
 
+// The figure of plots/velocity-sections (`vertical`) or plots/horizontal-sections: of each run and
+// instant its section map, the outlines of the region in motion (extent.region, when extent.count > 0)
+// and of the tool (cut at surface_y_m), and on the vertical sections the streamlines. Reads nothing
+// else of a run, so a run rebuilt from kept measures draws the same figure.
+Figure sectionsFigure(const std::vector<SoilMotionRun>& runs, bool vertical);
+
 }  // namespace demfem::analysis

@@ -42,8 +42,9 @@
 //   and the label of its runs, the run's stroke, window, window means
 //   and spreads, spectral fit, tilt range beside the paper's, soil motion beside Fig. 16's, wall time and the full-scale
 //   projection beside Table 1's hours; a case not finished has its run's figures empty) and, with a
-//   renderer, plots/paper_force_curves.svg, plots/paper_deformation_curves.svg and
-//   plots/paper_spectra.svg (scripts beside them) in `out` (staged: nothing appears unless
+//   renderer, plots/paper_force_curves.svg, plots/paper_deformation_curves.svg,
+//   plots/paper_spectra.svg and, for cases with soil motion, plots/paper_soil_motion.svg (the
+//   vertical velocity sections, as `demfem soil-motion` draws them; scripts beside them) in `out` (staged: nothing appears unless
 //   everything was written). Every table of the Markdown is a view of that one table (a report
 //   section, demfem/analysis/report_section.hpp). Returns the report as JSON: `cases`, one object
 //   per case keyed by the CSV's column names, null where the CSV has "nan".
@@ -53,6 +54,7 @@
 
 #include "demfem/analysis/evaluation.hpp"
 #include "demfem/analysis/plot.hpp"
+#include "demfem/analysis/soil_motion.hpp"
 #include "demfem/analysis/spectrum.hpp"
 #include "demfem/analysis/staged_output.hpp"
 #include "demfem/campaign/paper_convergence.hpp"
@@ -94,6 +96,12 @@ struct SoilMotionEvaluation {
   std::size_t front_particles = 0;
   double streamline_order = 0, mean_streamline_length_mm = 0;  // NaN: no cell / no streamline
   std::size_t streamlines = 0;
+  // What its plot shows (analysis::sectionsFigure()), kept with the numbers: the vertical section's
+  // speeds, the region in motion, the tool's bounds, the surface and the streamlines (m, m/s).
+  analysis::SectionMap vertical;
+  analysis::Box region, tool;
+  double surface_y_m = 0;
+  std::vector<analysis::Streamline> streamline_paths;
 };
 
 // A finished campaign run evaluated (see contract); wall_s from its kRunRecord.
