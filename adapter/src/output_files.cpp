@@ -1,6 +1,7 @@
 #include "demfem/adapter/output_files.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -77,6 +78,33 @@ void CheckedFile::close() {
   fd_ = -1;
   if (::close(fd) != 0) fail("close");
 }
+
+DirectoryLock::DirectoryLock(const fs::path& directory) {
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  if (ec) throw OutputError("cannot create the output directory " + directory.string() + " (" + ec.message() + ")");
+  const fs::path file = directory / kFileName;
+  fd_ = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw OutputError(file.string() + ": cannot open the run lock (" + reason(errno) + ")");
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    char holder[32] = {};
+    const ssize_t n = ::pread(fd_, holder, sizeof holder - 1, 0);
+    ::close(fd_);
+    if (error == EWOULDBLOCK)
+      throw OutputError(directory.string() + " is in use by another run (process " + (n > 0 ? std::string(holder, n) : std::string("unknown")) +
+                        "); wait for it to end or choose another output directory");
+    throw OutputError(file.string() + ": cannot lock (" + reason(error) + ")");
+  }
+  const std::string pid = std::to_string(::getpid());
+  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) != static_cast<ssize_t>(pid.size())) {
+    const int error = errno;
+    ::close(fd_);
+    throw OutputError(file.string() + ": cannot write the run lock (" + reason(error) + ")");
+  }
+}
+
+DirectoryLock::~DirectoryLock() { ::close(fd_); }  // closing the descriptor drops the lock
 
 void renameChecked(const fs::path& from, const fs::path& to) {
   std::error_code ec;

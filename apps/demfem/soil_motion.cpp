@@ -15,10 +15,16 @@ namespace demfem::cli {
 
 namespace {
 
+// The options' defaults are the analysis' own (in mm), so that the command and the paper report
+// measure alike.
+const analysis::SoilMotionSettings kDefaults{};
+
 struct SoilMotionOptions {
   std::vector<std::string> runs;
   std::vector<double> at_mm{42.0};
-  double threshold_mm_s = 5.0, cell_mm = 10.0, front_reach_mm = 10.5, mixing_cell_mm = 20.0, flow_cell_mm = 20.0;
+  double threshold_mm_s = kDefaults.threshold_m_s * 1e3, cell_mm = kDefaults.cell_m * 1e3,
+         front_reach_mm = kDefaults.front_reach_m * 1e3, mixing_cell_mm = kDefaults.mixing_cell_m * 1e3,
+         flow_cell_mm = kDefaults.flow_cell_m * 1e3;
   std::string tool, out_dir = "out/soil-motion", gnuplot = "gnuplot";
   bool no_plots = false;
 };

@@ -1,7 +1,7 @@
 // Time-step convergence on a reduced paper bin (campaign/paper_convergence.hpp): the case run at
 // halved fractions of the stiffest spring's critical step (from the largest given towards the
-// paper's), plus extra deposition seeds at one fraction for the seed scatter (every fraction of a
-// seed drags through that seed's one packing), all as one campaign
+// paper's), each at every deposition seed, every fraction of a seed dragging through that seed's
+// one packing, so that the step's effect is measured seed by seed; all as one campaign
 // (campaign/paper_campaign.hpp: resumable, a second call reruns nothing). Prints the Markdown table
 // of docs/paper-reproduction.md; --json writes the numbers (`demfem campaign --report
 // --convergence FILE` puts them in the report).
@@ -44,8 +44,8 @@ int main(int argc, char** argv) {
   app.add_option("--stroke-mm", stroke_mm, "tool stroke")->capture_default_str();
   app.add_option("--largest-fraction", largest, "coarsest fraction of the critical step")->check(CLI::Range(1e-6, 1.0))->capture_default_str();
   app.add_option("--halvings", halvings, "fractions after the coarsest, each half the one before")->check(CLI::NonNegativeNumber)->capture_default_str();
-  app.add_option("--seeds", seeds, "deposition seeds at --seed-fraction")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--seed-fraction", seed_fraction, "fraction the seeds run at (one of the halvings)")->capture_default_str();
+  app.add_option("--seeds", seeds, "deposition seeds; every fraction drags through each seed's packing")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--seed-fraction", seed_fraction, "fraction the packings are deposited at (one of the halvings)")->capture_default_str();
   app.add_option("--threads", threads, "DEM threads per case")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--jobs", jobs, "cases at once")->check(CLI::PositiveNumber)->capture_default_str();
   std::string& json_target = cli::addJsonOption(app);
@@ -56,9 +56,10 @@ int main(int argc, char** argv) {
     std::vector<fs::path> files;
     std::vector<study::Study> case_studies;
     std::vector<std::pair<double, std::uint64_t>> variants;
-    double f = largest;
-    for (int h = 0; h <= halvings; ++h, f /= 2) variants.emplace_back(f, 1);
-    for (int s = 2; s <= seeds; ++s) variants.emplace_back(seed_fraction, static_cast<std::uint64_t>(s));
+    for (int seed = 1; seed <= seeds; ++seed) {
+      double f = largest;
+      for (int h = 0; h <= halvings; ++h, f /= 2) variants.emplace_back(f, static_cast<std::uint64_t>(seed));
+    }
     for (const auto& [fraction, seed] : variants) {
       nlohmann::ordered_json s = campaign::reducedStudy(base, length_mm, width_mm, stroke_mm, fraction, seed);
       s["dem"]["threads"] = threads;

@@ -291,6 +291,7 @@ CampaignSummary runCampaign(const std::vector<fs::path>& study_files, const Camp
   if (study_files.empty()) throw ArgumentError("no study files given");
   if (options.jobs < 1) throw ArgumentError("--jobs must be at least 1");
   if (options.checkpoint_every < 1) throw ArgumentError("--checkpoint-every must be at least 1");
+  const adapter::DirectoryLock lock(options.directory);  // before any run directory is read
   const auto start = Clock::now();
   std::vector<Case> cases = loadCases(study_files, options);
   for (Case& c : cases)

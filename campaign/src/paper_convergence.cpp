@@ -9,26 +9,57 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace demfem::campaign {
 
 namespace {
 
-double sampleStd(const std::vector<double>& v) {
+double sampleVariance(const std::vector<double>& v) {
   if (v.size() < 2) return 0;
   double mean = 0;
   for (double x : v) mean += x;
   mean /= static_cast<double>(v.size());
   double ss = 0;
   for (double x : v) ss += (x - mean) * (x - mean);
-  return std::sqrt(ss / static_cast<double>(v.size() - 1));
+  return ss / static_cast<double>(v.size() - 1);
 }
 
-const ConvergencePoint* seedOne(const std::vector<ConvergencePoint>& points, double fraction) {
-  for (const ConvergencePoint& p : points)
-    if (p.dt_fraction == fraction && p.seed == 1 && p.failure.empty()) return &p;
-  return nullptr;
+double meanOf(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return v.empty() ? 0 : sum / static_cast<double>(v.size());
+}
+
+// The finished runs of one fraction, by seed.
+using SeedRuns = std::map<std::uint64_t, const ConvergencePoint*>;
+
+// `quantity` over the seeds of `runs`: mean, and the paired change against `finest`.
+SeedAverage seedAverage(const SeedRuns& runs, const SeedRuns& finest, double ConvergencePoint::* quantity) {
+  SeedAverage a;
+  std::vector<double> values, changes;
+  for (const auto& [seed, p] : runs) {
+    values.push_back(p->*quantity);
+    if (const auto f = finest.find(seed); f != finest.end()) changes.push_back(p->*quantity - f->second->*quantity);
+  }
+  a.mean = meanOf(values);
+  a.change = meanOf(changes);
+  a.change_se = std::sqrt(sampleVariance(changes) / static_cast<double>(std::max<std::size_t>(changes.size(), 1)));
+  return a;
+}
+
+// Pooled sample standard deviation of `quantity` between the seeds of each fraction.
+double pooledScatter(const std::map<double, SeedRuns>& by_fraction, double ConvergencePoint::* quantity) {
+  double ss = 0, dof = 0;
+  for (const auto& [fraction, runs] : by_fraction) {
+    std::vector<double> v;
+    for (const auto& [seed, p] : runs) v.push_back(p->*quantity);
+    if (v.size() < 2) continue;
+    ss += sampleVariance(v) * static_cast<double>(v.size() - 1);
+    dof += static_cast<double>(v.size() - 1);
+  }
+  return dof > 0 ? std::sqrt(ss / dof) : 0;
 }
 
 }  // namespace
@@ -57,35 +88,37 @@ ConvergenceSummary summarize(std::vector<ConvergencePoint> points, std::string r
     return a.dt_fraction != b.dt_fraction ? a.dt_fraction > b.dt_fraction : a.seed < b.seed;
   });
   s.points = std::move(points);
-  std::map<double, std::vector<const ConvergencePoint*>> by_fraction;
+  std::map<double, SeedRuns> by_fraction;  // ascending: finest first
+  std::set<std::uint64_t> seeds;
   for (const ConvergencePoint& p : s.points)
-    if (p.failure.empty()) by_fraction[p.dt_fraction].push_back(&p);
+    if (p.failure.empty()) {
+      by_fraction[p.dt_fraction][p.seed] = &p;
+      seeds.insert(p.seed);
+    }
   if (by_fraction.empty()) return s;
-  const auto most = std::max_element(by_fraction.begin(), by_fraction.end(),
-                                     [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
-  std::vector<double> f, d, b;
-  for (const ConvergencePoint* p : most->second) {
-    f.push_back(p->force_mean_N);
-    d.push_back(p->deformation_mean_mm);
-    b.push_back(p->fit_b);
-  }
-  s.scatter_seeds = most->second.size();
-  s.force_scatter_N = sampleStd(f);
-  s.deformation_scatter_mm = sampleStd(d);
-  s.fit_b_scatter = sampleStd(b);
-  const double finest = by_fraction.begin()->first;
-  const ConvergencePoint* ref = seedOne(s.points, finest);
-  if (!ref || s.scatter_seeds < 2) return s;
+  s.scatter_seeds = seeds.size();
+  s.force_scatter_N = pooledScatter(by_fraction, &ConvergencePoint::force_mean_N);
+  s.deformation_scatter_mm = pooledScatter(by_fraction, &ConvergencePoint::deformation_mean_mm);
+  s.fit_b_scatter = pooledScatter(by_fraction, &ConvergencePoint::fit_b);
+  const SeedRuns& finest = by_fraction.begin()->second;
+  const bool scattered = s.force_scatter_N > 0 && s.deformation_scatter_mm > 0 && s.fit_b_scatter > 0;
   bool all_finer_within = true;
-  for (const auto& [fraction, list] : by_fraction) {  // ascending: finest first
-    const ConvergencePoint* p = seedOne(s.points, fraction);
-    if (!p) continue;
-    const bool within = std::fabs(p->force_mean_N - ref->force_mean_N) <= 2 * s.force_scatter_N &&
-                        std::fabs(p->deformation_mean_mm - ref->deformation_mean_mm) <= 2 * s.deformation_scatter_mm &&
-                        std::fabs(p->fit_b - ref->fit_b) <= 2 * s.fit_b_scatter;
-    if (within) s.within_scatter.push_back(fraction);
-    all_finer_within = all_finer_within && within;
-    if (all_finer_within && fraction != finest) s.converged_fraction = fraction;
+  for (const auto& [fraction, runs] : by_fraction) {
+    FractionSummary f;
+    f.dt_fraction = fraction;
+    f.seeds = runs.size();
+    for (const auto& [seed, p] : runs) f.paired_seeds += finest.count(seed);
+    f.force_N = seedAverage(runs, finest, &ConvergencePoint::force_mean_N);
+    f.deformation_mm = seedAverage(runs, finest, &ConvergencePoint::deformation_mean_mm);
+    f.fit_b = seedAverage(runs, finest, &ConvergencePoint::fit_b);
+    f.within = scattered && f.paired_seeds >= 2 && std::fabs(f.force_N.change) <= s.force_scatter_N &&
+               std::fabs(f.deformation_mm.change) <= s.deformation_scatter_mm && std::fabs(f.fit_b.change) <= s.fit_b_scatter;
+    const bool finest_fraction = fraction == by_fraction.begin()->first;
+    if (!finest_fraction) {
+      all_finer_within = all_finer_within && f.within;
+      if (all_finer_within) s.converged_fraction = fraction;
+    }
+    s.fractions.insert(s.fractions.begin(), f);
   }
   return s;
 }
@@ -97,13 +130,19 @@ nlohmann::json toJson(const ConvergenceSummary& s) {
                       {"force_std_N", p.force_std_N}, {"deformation_mean_mm", p.deformation_mean_mm},
                       {"deformation_std_mm", p.deformation_std_mm}, {"fit_b", p.fit_b}, {"fit_a", p.fit_a}, {"wall_time_s", p.wall_s},
                       {"failure", p.failure}});
+  const auto average = [](const SeedAverage& a) { return nlohmann::json{{"mean", a.mean}, {"change", a.change}, {"change_se", a.change_se}}; };
+  nlohmann::json fractions = nlohmann::json::array();
+  for (const FractionSummary& f : s.fractions)
+    fractions.push_back({{"dt_fraction", f.dt_fraction}, {"seeds", f.seeds}, {"paired_seeds", f.paired_seeds},
+                         {"force_N", average(f.force_N)}, {"deformation_mm", average(f.deformation_mm)}, {"fit_b", average(f.fit_b)},
+                         {"within_scatter", f.within}});
   return {{"reduced_case", s.reduced_case},
           {"points", points},
           {"scatter_seeds", s.scatter_seeds},
           {"force_scatter_N", s.force_scatter_N},
           {"deformation_scatter_mm", s.deformation_scatter_mm},
           {"fit_b_scatter", s.fit_b_scatter},
-          {"within_scatter_fractions", s.within_scatter},
+          {"fractions", fractions},
           {"converged_fraction", s.converged_fraction ? nlohmann::json(*s.converged_fraction) : nlohmann::json(nullptr)}};
 }
 
@@ -132,24 +171,32 @@ std::string markdown(const ConvergenceSummary& s) {
        << " ± " << formatNumber("%.2g", p.force_std_N) << " | " << formatNumber("%.4g", p.deformation_mean_mm) << " ± " << formatNumber("%.2g", p.deformation_std_mm)
        << " | " << formatNumber("%.3f", p.fit_b) << " | " << formatNumber("%.3g", p.fit_a) << " | " << formatNumber("%.0f", p.wall_s) << " |\n";
   }
-  md << "\nSeed scatter (" << s.scatter_seeds << " deposition seeds): force " << formatNumber("%.3g", s.force_scatter_N) << " N, deformation "
-     << formatNumber("%.3g", s.deformation_scatter_mm) << " mm, fit b " << formatNumber("%.3f", s.fit_b_scatter) << ". ";
+  md << "\nPer fraction, over its seeds; the change is against the finest step, seed by seed through the same packing (mean ± "
+        "standard error). Seed scatter, the spread of one run between seeds ("
+     << s.scatter_seeds << " deposition seeds, pooled over the fractions): force " << formatNumber("%.3g", s.force_scatter_N)
+     << " N, deformation " << formatNumber("%.3g", s.deformation_scatter_mm) << " mm, fit b " << formatNumber("%.3f", s.fit_b_scatter)
+     << ".\n\n| dt fraction | seeds | force N | force change N | deformation mm | deformation change mm | fit b | fit b change | "
+        "within one scatter |\n|---|---|---|---|---|---|---|---|---|\n";
+  const auto change = [](const SeedAverage& a, const char* format) {
+    return formatNumber(format, a.change) + " ± " + formatNumber("%.2g", a.change_se);
+  };
+  const double finest_force_N = s.fractions.empty() ? 0 : s.fractions.back().force_N.mean;
+  for (const FractionSummary& f : s.fractions) {
+    const bool finest = &f == &s.fractions.back();
+    md << "| " << formatNumber("%g", f.dt_fraction) << " | " << f.seeds << " | " << formatNumber("%.4g", f.force_N.mean) << " | "
+       << (finest ? "(finest)" : change(f.force_N, "%+.3g") + " (" + formatNumber("%+.1f", 100 * f.force_N.change / finest_force_N) + " %)")
+       << " | " << formatNumber("%.4g", f.deformation_mm.mean) << " | " << (finest ? "(finest)" : change(f.deformation_mm, "%+.3g")) << " | "
+       << formatNumber("%.3f", f.fit_b.mean) << " | " << (finest ? "(finest)" : change(f.fit_b, "%+.3f")) << " | "
+       << (finest ? "" : f.within ? "yes" : "no") << " |\n";
+  }
+  md << '\n';
   if (s.converged_fraction)
     md << "Every fraction up to " << formatNumber("%g", *s.converged_fraction)
-       << " gives the finest step's numbers within two seed scatters: that is the converged fraction.";
+       << " changes force, deformation and fit exponent by at most one seed scatter against the finest step: that is the converged "
+          "fraction.";
   else
-    md << "No coarser fraction gives the finest step's numbers within two seed scatters: the step is not shown converged at "
-          "these fractions.";
-  // The change of the seed-1 force and deformation means at each halving (fractions descending).
-  const ConvergencePoint* previous = nullptr;
-  for (const ConvergencePoint& p : s.points) {
-    if (p.seed != 1 || !p.failure.empty()) continue;
-    if (previous)
-      md << " From " << formatNumber("%g", previous->dt_fraction) << " to " << formatNumber("%g", p.dt_fraction) << ": force "
-         << formatNumber("%+.1f", 100 * (p.force_mean_N / previous->force_mean_N - 1)) << " %, deformation "
-         << formatNumber("%+.1f", 100 * (p.deformation_mean_mm / previous->deformation_mean_mm - 1)) << " %.";
-    previous = &p;
-  }
+    md << "No coarser fraction is within one seed scatter of the finest step (over at least two seeds): the step is not shown "
+          "converged at these fractions.";
   md << '\n';
   return md.str();
 }

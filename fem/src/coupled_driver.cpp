@@ -129,9 +129,9 @@ struct CoupledDriver::Impl {
   adapter::CouplingApi& dem() const { return *dem_; }
 
   CoupledRunSummary run(adapter::CouplingApi& dem_api) {
+    const adapter::DirectoryLock lock(options_.output_dir);  // before anything is read or written there
     dem_ = &dem_api;
     attach();
-    fs::create_directories(options_.output_dir);
     DriverState state;
     const auto wall_start = std::chrono::steady_clock::now();
     try {

@@ -1,5 +1,6 @@
 // `demfem campaign`: a shortened paper-style case (a few hundred FEM steps on the built-in DEM) run,
-// interrupted by Ctrl-C after its first checkpoint, resumed, not rerun once finished, equal to an
+// refused to a second campaign on its directory while it runs, interrupted by Ctrl-C after its first
+// checkpoint, resumed, not rerun once finished, equal to an
 // uninterrupted run, and reported beside the paper's numbers.
 #include "process.hpp"
 
@@ -41,6 +42,13 @@ TEST_CASE("demfem campaign resumes an interrupted case from its checkpoint, skip
   Process first(campaign(runs, "first"), dir / "first");
   const fs::path checkpoint = run_dir / "checkpoint" / "fem_state.bin";
   REQUIRE(waitForFile(checkpoint, first, 300s));
+  // A second campaign on the same directory while the first runs: refused at once, naming the
+  // holder (the resumed run below equalling the uninterrupted one shows it wrote nothing there).
+  Process intruder(campaign(runs, "intruder"), dir / "intruder");
+  const int intruder_status = intruder.wait(60s);
+  REQUIRE(WIFEXITED(intruder_status));
+  CHECK(WEXITSTATUS(intruder_status) != 0);
+  CHECK_THAT(intruder.err(), Catch::Contains(runs.string() + " is in use by another run (process " + std::to_string(first.pid()) + ")"));
   first.signal(SIGINT);
   const int status = first.wait(60s);
   INFO(first.err());

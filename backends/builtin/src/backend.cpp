@@ -203,8 +203,9 @@ class BuiltinBackend final : public adapter::CouplingApi {
   std::filesystem::path vtkDirectory() const { return study_.output.directory / "vtk"; }
 
   // One collection per series (particles, each tool), continued from `resume_time_s` after a restore.
+  // The directory is made by the first file written: a backend built for a run that never starts
+  // (its output directory held by another run) leaves nothing there.
   void openVtkSeries(std::optional<double> resume_time_s) {
-    std::filesystem::create_directories(vtkDirectory());
     vtk_series_.clear();
     vtk_series_.emplace("particles", adapter::VtkSeries(vtkDirectory() / "particles.pvd", resume_time_s));
     for (const auto& [name, m] : meshes_)
@@ -214,6 +215,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
   // Particles and tools at the current time, named by the FEM step they begin (the FEM client's
   // tool files of the same instant carry the same number and time).
   void writeVtk() {
+    std::filesystem::create_directories(vtkDirectory());
     char index[24];
     std::snprintf(index, sizeof(index), "_%06lld.vtp", static_cast<long long>(std::llround(sim_.time() / study_.fem.dt_s)));
     const std::string particles = std::string("particles") + index;

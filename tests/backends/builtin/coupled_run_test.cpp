@@ -1,6 +1,7 @@
 // The FEM client (fem/coupled_driver.hpp) coupled in-process to the builtin backend on a small
 // deposited bin: the tool's motion has one owner (the plan, study/tool_motion.hpp) and the FEM and
 // DEM output files share one clock.
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/fem/coupled_driver.hpp"
 #include "demfem/study/study.hpp"
@@ -104,4 +105,18 @@ TEST_CASE("a coupled run on the builtin DEM moves the tool once: down from the p
   }
   CHECK(largest_gap < 1e-9);
   fs::remove_all(dir);
+}
+
+TEST_CASE("a coupled run on the builtin DEM refuses an output directory another run holds and writes nothing there",
+          "[builtin][fem]") {
+  const fs::path dir = support::freshDir("builtin-coupled-locked");
+  const study::Study study = smallCoupledStudy(dir / "out");
+  const adapter::DirectoryLock other_run(dir / "out");
+  auto backend = builtin::makeBackend(study);
+  fem::CoupledRunOptions options;
+  options.output_dir = dir / "out";
+  CHECK_THROWS_WITH(fem::CoupledDriver(study, options).run(*backend), Catch::Contains("is in use by another run"));
+  std::vector<std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir / "out")) files.push_back(e.path().filename().string());
+  CHECK(files == std::vector<std::string>{adapter::DirectoryLock::kFileName});
 }

@@ -14,6 +14,12 @@
 // - VtkSeries: a ParaView collection (.pvd, XML) listing data files with their simulated time;
 //   rewritten atomically after every add(), so a stopped run leaves a collection of the files it
 //   wrote. Entries are file names relative to the collection's directory.
+// - DirectoryLock: one run's exclusive claim on its output directory, flock(2) on DIR/run.lock,
+//   held until destruction. The system drops it when the holding process ends however it ends, so
+//   a killed run leaves no stale lock. The file names the holder's process id. A second claim on a
+//   held directory, from another process or the same one, throws OutputError naming the directory
+//   and the holder at once (it never waits): two runs writing one directory would interleave their
+//   files.
 #pragma once
 
 #include <cstdint>
@@ -57,6 +63,18 @@ class CheckedFile {
   std::filesystem::path path_;
   int fd_ = -1;
   std::uint64_t size_ = 0;
+};
+
+class DirectoryLock {
+ public:
+  static constexpr const char* kFileName = "run.lock";
+  explicit DirectoryLock(const std::filesystem::path& directory);  // creates the directory if needed
+  ~DirectoryLock();
+  DirectoryLock(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(const DirectoryLock&) = delete;
+
+ private:
+  int fd_ = -1;
 };
 
 // Renames `from` to `to`; throws OutputError naming both.

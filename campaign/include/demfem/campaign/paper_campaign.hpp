@@ -21,6 +21,10 @@
 //   depth, velocity or tool share it). A soil that is not settled (adapter::unsettledReason) is an
 //   ArgumentError naming the case, the file and the reason before any case runs, unless
 //   `allow_unsettled_soil` (the run then records settled: false in its sensors.json).
+// - One campaign per directory: runCampaign holds `directory`'s adapter::DirectoryLock for its
+//   whole call, so a second call on the same directory throws OutputError naming it and the
+//   holder before it reads or writes anything there; each case's run holds its run directory's
+//   (fem/coupled_driver.hpp).
 // - Concurrency: `jobs` cases at once, each with `threads` built-in DEM threads (0: the study's
 //   dem.threads divided by jobs, at least 1); cases start in the given order.
 // - Estimates: estimate_wall_s (the caller's estimate from measured speeds, `demfem validate`'s)

@@ -8,11 +8,17 @@
 //   length x width (fill height, layers, particles and contact data kept), the stroke cut, the
 //   DEM step at `fraction` of the stiffest spring (dem.criterion stiffest-spring) and the
 //   deposition seed set; the name says all three. Throws study::StudyError if that is invalid.
-// - summarize(points): points with a failure are listed but enter nothing else. The seed scatter is the sample standard deviation, over the points of the
-//   most-seeded fraction, of force mean, deformation mean and fit exponent b (0 with one seed). A
-//   fraction is within the scatter when each of its seed-1 numbers differs from the finest
-//   fraction's seed-1 number by at most 2 scatters; `converged_fraction` is the largest fraction
-//   coarser than the finest that is, and every finer one too (none without a scatter).
+// - summarize(points): points with a failure are listed but enter nothing else. Every fraction
+//   is meant to run at the same deposition seeds, each seed's fractions dragging through that seed's
+//   one packing, so that a fraction's change against the finest step is measured pairwise (common
+//   random numbers). Per fraction: the means over its seeds of force mean, deformation mean and fit
+//   exponent b, and the change against the finest fraction, the mean over the seeds both finished
+//   of (this - finest), with its standard error (sample sd / sqrt(n); 0 with one seed). The seed
+//   scatter is the pooled sample standard deviation of those three numbers between the seeds of
+//   each fraction (0 without a fraction of two seeds): the spread a single run shows. A fraction is
+//   within the scatter when each of its three changes is at most one scatter, over at least two
+//   paired seeds; `converged_fraction` is the largest fraction coarser than the finest that is, and
+//   every finer one too (none without a scatter).
 // - markdown(): the table and the verdict, for the bench's output and the report.
 #pragma once
 
@@ -34,11 +40,24 @@ struct ConvergencePoint {
   std::string failure;  // empty: the run finished; else why not (a blow-up: the step is unstable)
 };
 
+// One number over a fraction's seeds: its mean, and its change against the finest fraction's
+// (paired by seed) with that change's standard error.
+struct SeedAverage {
+  double mean = 0, change = 0, change_se = 0;
+};
+
+struct FractionSummary {
+  double dt_fraction = 0;
+  std::size_t seeds = 0, paired_seeds = 0;  // finished runs; those also finished at the finest step
+  SeedAverage force_N, deformation_mm, fit_b;
+  bool within = false;
+};
+
 struct ConvergenceSummary {
   std::vector<ConvergencePoint> points;
+  std::vector<FractionSummary> fractions;  // coarsest first
   double force_scatter_N = 0, deformation_scatter_mm = 0, fit_b_scatter = 0;
-  std::size_t scatter_seeds = 0;
-  std::vector<double> within_scatter;  // fractions within the scatter of the finest
+  std::size_t scatter_seeds = 0;  // distinct seeds among the finished runs
   std::optional<double> converged_fraction;
   std::string reduced_case;  // what was run (bin, stroke, particles), for the table's caption
 };

@@ -34,6 +34,9 @@
 //                that step) and the collection vtk/fem-TOOL.pvd, timed on the DEM clock: the tool as
 //                the DEM simulates it from that instant (the positions just sent), so a DEM
 //                backend's files of the same step (builtin: vtk/dem-TOOL_NNNNNN.vtp) coincide.
+//   The run holds output_dir's adapter::DirectoryLock (run.lock) from start to end: a second run
+//   on the same directory, e.g. a second `demfem campaign` on one campaign directory, fails at
+//   once with OutputError naming the directory and the holder, and writes nothing there.
 //   Every write, sync, close and rename is checked (adapter/output_files.hpp). Streams are
 //   written as NAME.partial and renamed when the run ends. A run that does not do the whole plan —
 //   a failure, an interruption, or max_steps below the plan — is marked incomplete: the CSV gets a
