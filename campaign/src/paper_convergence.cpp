@@ -111,8 +111,11 @@ ConvergenceSummary summarize(std::vector<ConvergencePoint> points, std::string r
     f.force_N = seedAverage(runs, finest, &ConvergencePoint::force_mean_N);
     f.deformation_mm = seedAverage(runs, finest, &ConvergencePoint::deformation_mean_mm);
     f.fit_b = seedAverage(runs, finest, &ConvergencePoint::fit_b);
-    f.within = scattered && f.paired_seeds >= 2 && std::fabs(f.force_N.change) <= s.force_scatter_N &&
-               std::fabs(f.deformation_mm.change) <= s.deformation_scatter_mm && std::fabs(f.fit_b.change) <= s.fit_b_scatter;
+    const auto small = [](const SeedAverage& a, double scatter) {
+      return std::fabs(a.change) <= scatter && std::fabs(a.change) <= 2 * a.change_se;
+    };
+    f.within = scattered && f.paired_seeds >= 2 && small(f.force_N, s.force_scatter_N) &&
+               small(f.deformation_mm, s.deformation_scatter_mm) && small(f.fit_b, s.fit_b_scatter);
     const bool finest_fraction = fraction == by_fraction.begin()->first;
     if (!finest_fraction) {
       all_finer_within = all_finer_within && f.within;
@@ -176,7 +179,7 @@ std::string markdown(const ConvergenceSummary& s) {
      << s.scatter_seeds << " deposition seeds, pooled over the fractions): force " << formatNumber("%.3g", s.force_scatter_N)
      << " N, deformation " << formatNumber("%.3g", s.deformation_scatter_mm) << " mm, fit b " << formatNumber("%.3f", s.fit_b_scatter)
      << ".\n\n| dt fraction | seeds | force N | force change N | deformation mm | deformation change mm | fit b | fit b change | "
-        "within one scatter |\n|---|---|---|---|---|---|---|---|---|\n";
+        "converged |\n|---|---|---|---|---|---|---|---|---|\n";
   const auto change = [](const SeedAverage& a, const char* format) {
     return formatNumber(format, a.change) + " ± " + formatNumber("%.2g", a.change_se);
   };
@@ -192,11 +195,11 @@ std::string markdown(const ConvergenceSummary& s) {
   md << '\n';
   if (s.converged_fraction)
     md << "Every fraction up to " << formatNumber("%g", *s.converged_fraction)
-       << " changes force, deformation and fit exponent by at most one seed scatter against the finest step: that is the converged "
-          "fraction.";
+       << " changes force, deformation and fit exponent against the finest step by at most one seed scatter and by no more "
+          "than two standard errors (no bias the seeds can tell): that is the converged fraction.";
   else
-    md << "No coarser fraction is within one seed scatter of the finest step (over at least two seeds): the step is not shown "
-          "converged at these fractions.";
+    md << "No coarser fraction changes force, deformation and fit exponent against the finest step by at most one seed scatter "
+          "and two standard errors (over at least two seeds): the step is not shown converged at these fractions.";
   md << '\n';
   return md.str();
 }

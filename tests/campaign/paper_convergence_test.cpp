@@ -26,33 +26,38 @@ ConvergencePoint point(double fraction, std::uint64_t seed, double force, double
 
 }  // namespace
 
-TEST_CASE("the converged fraction is the coarsest whose seed-paired change is within one seed scatter", "[campaign]") {
-  // Seeds 1-3 at three fractions; seed s's packing gives +0.1 (s - 2) N at every step, so the
-  // scatter is 0.1 N and the pairing removes it from the changes.
+TEST_CASE("the converged fraction is the coarsest whose seed-paired change is within one seed scatter and two standard errors",
+          "[campaign]") {
+  // Seeds 1-3; seed s's packing gives +0.1 (s - 2) N at every step (the pairing removes it from the
+  // changes), and `noise` x (1, -2, 1) more that differs between steps (it gives the changes a
+  // standard error of exactly `noise`). Deformation is a hundredth of force.
   std::vector<ConvergencePoint> points;
-  const auto add = [&](double fraction, double force, double deformation, double b) {
+  const auto add = [&](double fraction, double force, double deformation, double b, double noise) {
+    constexpr double e[] = {1, -2, 1};
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-      const double d = static_cast<double>(seed) - 2.0;
-      points.push_back(point(fraction, seed, force + 0.1 * d, deformation + 0.001 * d, b + 0.1 * d));
+      const double d = 0.1 * (static_cast<double>(seed) - 2.0) + noise * e[seed - 1];
+      points.push_back(point(fraction, seed, force + d, deformation + 0.01 * d, b + d));
     }
   };
-  add(0.05, 7.0, 0.060, -1.5);
-  add(0.1, 7.08, 0.0605, -1.45);  // 0.08 N, 0.0005 mm, 0.05 from the finest: within
-  add(0.2, 7.15, 0.0598, -1.55);  // 0.15 N: beyond one scatter
+  add(0.05, 7.0, 0.060, -1.5, 0);
+  add(0.1, 7.08, 0.0608, -1.45, 0.05);   // changes 0.08 N, 0.0008 mm, 0.05, each +- 0.05 (0.0005): within
+  add(0.2, 7.15, 0.0598, -1.55, 0.05);   // 0.15 N: beyond one scatter
   ConvergencePoint failed = point(0.4, 1, 0, 0, 0);
   failed.failure = "builtin DEM blew up at step 10";
   points.push_back(failed);
   const ConvergenceSummary s = summarize(points, "test");
   CHECK(s.scatter_seeds == 3);
-  CHECK(s.force_scatter_N == Approx(0.1).epsilon(1e-9));
-  CHECK(s.deformation_scatter_mm == Approx(0.001).epsilon(1e-9));
-  CHECK(s.fit_b_scatter == Approx(0.1).epsilon(1e-9));
+  // Pooled: variances 0.01 (0.05) and 0.0175 (0.1, 0.2), two degrees of freedom each.
+  CHECK(s.force_scatter_N == Approx(std::sqrt(0.045 / 3)).epsilon(1e-9));
+  CHECK(s.deformation_scatter_mm == Approx(0.01 * std::sqrt(0.045 / 3)).epsilon(1e-9));
+  CHECK(s.fit_b_scatter == Approx(std::sqrt(0.045 / 3)).epsilon(1e-9));
   REQUIRE(s.fractions.size() == 3);  // the failed fraction enters nothing
   CHECK(s.fractions.front().dt_fraction == 0.2);  // coarsest first
   CHECK(s.fractions.front().force_N.mean == Approx(7.15));
   CHECK(s.fractions.front().force_N.change == Approx(0.15));
-  CHECK(s.fractions.front().force_N.change_se == Approx(0).margin(1e-12));  // the same offset for every seed
+  CHECK(s.fractions.front().force_N.change_se == Approx(0.05));
   CHECK_FALSE(s.fractions.front().within);
+  CHECK(s.fractions[1].force_N.change == Approx(0.08));
   CHECK(s.fractions[1].within);
   REQUIRE(s.converged_fraction);
   CHECK(*s.converged_fraction == 0.1);
@@ -60,12 +65,14 @@ TEST_CASE("the converged fraction is the coarsest whose seed-paired change is wi
   CHECK(convergenceFromJson(toJson(s)).converged_fraction == s.converged_fraction);
   CHECK_THAT(markdown(s), Catch::Contains("blew up at step 10") && Catch::Contains("converged fraction"));
 
-  // A change that differs between seeds: its standard error is sd / sqrt(3).
-  points[3].force_mean_N += 0.03;  // 0.1 at seed 1
-  points[5].force_mean_N -= 0.03;  // 0.1 at seed 3
-  CHECK(summarize(points, "test").fractions[1].force_N.change_se == Approx(0.03 / std::sqrt(3.0)));
+  // The same changes with no noise between steps: 0.08 N is then a bias the seeds tell for sure.
+  std::vector<ConvergencePoint> exact = points;
+  for (ConvergencePoint& p : exact)
+    if (p.dt_fraction == 0.1) p = point(0.1, p.seed, 7.08 + 0.1 * (p.seed - 2.0), 0.0608 + 0.001 * (p.seed - 2.0), -1.45 + 0.1 * (p.seed - 2.0));
+  CHECK_FALSE(summarize(exact, "test").fractions[1].within);
+  CHECK_FALSE(summarize(exact, "test").converged_fraction);
 
-  // The 0.1 fraction changed by two scatters: nothing coarser than the finest is converged, even
+  // The 0.1 fraction changed beyond one scatter: nothing coarser than the finest is converged, even
   // though 0.2 alone would be within.
   for (ConvergencePoint& p : points)
     if (p.dt_fraction == 0.1) p.force_mean_N += 0.12;

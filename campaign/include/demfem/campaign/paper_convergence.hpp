@@ -16,9 +16,12 @@
 //   of (this - finest), with its standard error (sample sd / sqrt(n); 0 with one seed). The seed
 //   scatter is the pooled sample standard deviation of those three numbers between the seeds of
 //   each fraction (0 without a fraction of two seeds): the spread a single run shows. A fraction is
-//   within the scatter when each of its three changes is at most one scatter, over at least two
-//   paired seeds; `converged_fraction` is the largest fraction coarser than the finest that is, and
-//   every finer one too (none without a scatter).
+//   within (`FractionSummary::within`) when each of its three changes is at most one scatter (the
+//   step moves the result less than a new packing does) and at most two standard errors (no bias
+//   the seeds can tell), over at least two paired seeds; `converged_fraction` is the largest
+//   fraction coarser than the finest that is, and every finer one too (none without a scatter).
+//   With many seeds the second condition asks for a bias below what they resolve: it is
+//   conservative, never lax.
 // - markdown(): the table and the verdict, for the bench's output and the report.
 #pragma once
 
