@@ -33,7 +33,7 @@ struct CampaignOptions {
   std::int64_t steps = 0;
   std::string report_dir;
   std::string label;
-  std::string convergence;
+  std::vector<std::string> convergence;
   std::string gnuplot = "gnuplot";
   bool no_plots = false;
   bool quiet = false;
@@ -91,7 +91,7 @@ void run(CampaignOptions& o, const std::string& json_target) {
     r.label = o.label;
     r.estimate_wall_s = estimateWallSeconds;
     r.renderer = o.no_plots ? nullptr : &renderer;
-    if (!o.convergence.empty()) r.convergence = readConvergence(o.convergence);
+    for (const std::string& file : o.convergence) r.convergence.push_back(readConvergence(file));
     analysis::StagedOutput out(o.report_dir);
     const nlohmann::json doc = campaign::writePaperReport(files, r, out);
     out.commit();
@@ -138,7 +138,7 @@ void addCampaignCommand(CLI::App& app) {
   cmd->add_option("--steps", o->steps, "Stop each case after this many FEM steps (marked incomplete; a later call continues)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--report", o->report_dir, "Write the report of the finished runs to this directory (runs nothing)");
-  cmd->add_option("--convergence", o->convergence, "With --report: the time-step table of demfem-bench-paper-convergence --json FILE")
+  cmd->add_option("--convergence", o->convergence, "With --report: the time-step table of demfem-bench-paper-convergence --json FILE (repeatable: one table each, in this order)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--label", o->label, "Text the report names its runs by (e.g. the source revision they came from)");
   addPlotOptions(*cmd, o->no_plots, o->gnuplot, "report's SVG plots");

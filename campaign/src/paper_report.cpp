@@ -565,7 +565,7 @@ std::vector<Case> tiltRows(const std::vector<ReportCase>& cases) {
 }
 
 // Why the cases step as they do, the step of each, and the convergence study behind it.
-std::string timeStepSection(const std::vector<ReportCase>& cases, const std::optional<ConvergenceSummary>& convergence) {
+std::string timeStepSection(const std::vector<ReportCase>& cases, const std::vector<ConvergenceSummary>& convergence) {
   std::ostringstream md;
   md << "The paper steps its DEM at 7.93e-7 s, 20 % of a Rayleigh estimate made with the shear modulus G = 4.3e10 Pa. Its "
         "contact law does not use G: the hysteretic spring loads at K1 = 5 R* Y with the yield strength Y = 5.88e5 Pa and unloads "
@@ -573,7 +573,8 @@ std::string timeStepSection(const std::vector<ReportCase>& cases, const std::opt
         "stiffest spring's contact half period pi sqrt(m*/k_max) over the particle, bin and tool contacts (docs/architecture.md "
         "section 11); `dem.dt_s` = 7.93e-7 keeps the paper's step.\n\n"
      << caseSection().markdownOf(caseRows(cases), timeStepView()) << '\n';
-  if (convergence) md << "Convergence (`demfem-bench-paper-convergence`):\n\n" << markdown(*convergence) << '\n';
+  for (const ConvergenceSummary& study : convergence)
+    md << "Convergence (`demfem-bench-paper-convergence`):\n\n" << markdown(study) << '\n';
   return md.str();
 }
 

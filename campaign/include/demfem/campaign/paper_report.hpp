@@ -35,8 +35,8 @@
 //   earlier report without the key `soil_motion` has none.
 // - Wall time: the run's summed wall time (kRunRecord) and the full-scale projection: the estimate
 //   of the study file as given (estimate_wall_s), times measured / estimated of the run itself.
-// - Time step: with `convergence` (the bench's JSON, campaign/paper_convergence.hpp) its table and
-//   verdict, after the explanation of the step the cases run at.
+// - Time step: for each of `convergence` (the bench's JSON, campaign/paper_convergence.hpp) its
+//   tables and verdict, in order, after the explanation of the step the cases run at.
 // - Output: `paper-reproduction.md`, its table `paper-reproduction.csv` (one row per case: the
 //   case, its tool, model, depth and velocities, DEM step, whether its evaluation is a kept one
 //   and the label of its runs, the run's stroke, window, window means
@@ -131,7 +131,7 @@ struct ReportOptions {
   std::string label;                              // the source revision the runs came from (kept with each evaluation)
   std::function<double(const study::Study&)> estimate_wall_s;  // required
   const analysis::GnuplotRenderer* renderer = nullptr;         // no plots without
-  std::optional<ConvergenceSummary> convergence;               // the "Time step" section's table
+  std::vector<ConvergenceSummary> convergence;                 // the "Time step" section's tables
 };
 
 nlohmann::json writePaperReport(const std::vector<std::filesystem::path>& study_files, const ReportOptions& options,
