@@ -82,11 +82,12 @@ TEST_CASE("the soil-bin studies carry Table 1's depths and velocities", "[study]
     CHECK(s.tools[0].constraints.clamp_length_m == 0.040);
     CHECK(s.tools[0].constraints.load_cell_from_top_m == 0.065);
     CHECK(s.tools[0].constraints.sensor_from_top_m == 0.093);
-    // A tenth of the stiffest spring's contact time (docs/paper-reproduction.md); the paper's
-    // 7.93e-7 s (Section 2.10.2) is the explicit dem.dt_s the notes name.
+    // A fortieth of the stiffest spring's contact time, the coarsest fraction the convergence
+    // study shows converged (docs/paper-reproduction.md, "Time step"); the paper's 7.93e-7 s
+    // (Section 2.10.2) is the explicit dem.dt_s the notes name.
     CHECK_FALSE(s.dem.dt_s);
     CHECK(s.dem.criterion == demfem::study::TimeStepCriterion::StiffestSpring);
-    CHECK(s.dem.dt_fraction == 0.1);
+    CHECK(s.dem.dt_fraction == 0.025);
     // Table 3's 1 ms, halved for the flexible PMMA tool at 30 and 42 mm, where the explicit
     // exchange is unstable at 1 ms (docs/builtin-dem.md, "Blow-up detection").
     const bool flexible_deep = s.tools[0].name == "PMMA" && c.depth_m > 0.020;
