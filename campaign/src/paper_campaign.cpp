@@ -17,7 +17,6 @@
 #include <fstream>
 #include <mutex>
 #include <set>
-#include <sstream>
 #include <thread>
 
 namespace demfem::campaign {
@@ -41,13 +40,6 @@ class CheckpointsInDirectory final : public adapter::ForwardingApi {
   std::unique_ptr<adapter::CouplingApi> dem_;
   fs::path dir_;
 };
-
-std::string readText(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // Adds this call's wall time to the case's record (kRunRecord), so a resumed case reports the sum.
 void recordWallTime(const fs::path& run_dir, double wall_s, double estimate_s) {
@@ -75,15 +67,14 @@ struct Case {
 // Claims the run directory for the study (see contract) and says whether it resumes.
 bool prepareRunDirectory(const Case& c) {
   const fs::path record = c.status.run_dir / "study.json";
-  const std::string text = caseStudyRecord(c.study);
   if (fs::exists(record)) {
-    if (readText(record) != text)
+    if (!sameCase(study::loadStudy(record), c.study))
       throw ArgumentError(c.status.run_dir.string() + " holds a run of another study than " + c.status.study_file.string() +
                           " (its study.json differs); remove that directory to start the case over");
     return fs::exists(c.status.run_dir / "checkpoint" / "fem_state.bin");
   }
   fs::create_directories(c.status.run_dir);
-  adapter::writeFileAtomically(record, text);
+  adapter::writeFileAtomically(record, caseStudyRecord(c.study));
   return false;
 }
 
@@ -243,7 +234,7 @@ std::vector<Case> loadCases(const std::vector<fs::path>& files, const CampaignOp
     c.status.run_dir = o.directory / c.status.name;
     c.status.estimate_wall_s = o.estimate_wall_s ? o.estimate_wall_s(c.study) : 0;
     if (finishedRun(c.status.run_dir)) {
-      if (readText(c.status.run_dir / "study.json") != caseStudyRecord(c.study))
+      if (!sameCase(study::loadStudy(c.status.run_dir / "study.json"), c.study))
         throw ArgumentError(c.status.run_dir.string() + " holds a finished run of another study than " + file.string() +
                             "; remove that directory to run the case again");
       c.status.state = CaseState::Done;
@@ -261,6 +252,14 @@ std::string caseStudyRecord(const study::Study& s) {
   if (doc.contains("dem")) doc["dem"].erase("threads");
   return doc.dump(2) + '\n';
 }
+
+std::string caseIdentity(const study::Study& s) {
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(caseStudyRecord(s));
+  doc.erase("notes");
+  return doc.dump();
+}
+
+bool sameCase(const study::Study& a, const study::Study& b) { return caseIdentity(a) == caseIdentity(b); }
 
 bool finishedRun(const fs::path& run_dir) {
   std::ifstream in(run_dir / "sensors.json");

@@ -105,7 +105,7 @@ analysis::Spectrum binned(const analysis::Spectrum& s) {
 
 std::string studyHash(const study::Study& s) {
   char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(study::fnv1a64(caseStudyRecord(s))));
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(study::fnv1a64(caseIdentity(s))));
   return hex;
 }
 
@@ -297,7 +297,7 @@ std::optional<Evaluated> freshEvaluation(const ReportCase& c, const ReportOption
   const fs::path run_dir = o.directory / c.name;
   if (!finishedRun(run_dir)) return std::nullopt;
   const study::Study run_study = study::loadStudy(run_dir / "study.json");
-  if (caseStudyRecord(run_study) != caseStudyRecord(c.study))
+  if (!sameCase(run_study, c.study))
     throw ArgumentError(run_dir.string() + " holds a finished run of another study than the case " + c.name +
                         "; remove that directory to run the case again");
   Evaluated e;

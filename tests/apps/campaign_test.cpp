@@ -1,7 +1,7 @@
 // `demfem campaign`: a shortened paper-style case (a few hundred FEM steps on the built-in DEM) run,
 // refused to a second campaign on its directory while it runs, interrupted by Ctrl-C after its first
-// checkpoint, resumed, not rerun once finished, equal to an
-// uninterrupted run, and reported beside the paper's numbers.
+// checkpoint, resumed, not rerun once finished (nor after an edited note; refused after an edited
+// value), equal to an uninterrupted run, and reported beside the paper's numbers.
 #include "process.hpp"
 
 #include <catch2/catch.hpp>
@@ -66,6 +66,22 @@ TEST_CASE("demfem campaign resumes an interrupted case from its checkpoint, skip
   Process third(campaign(runs, "third"), dir / "third");
   REQUIRE(exitedOk(third.wait(120s)));
   CHECK(caseOf(dir / "third.json")["done_before"] == true);
+  // The notes are free text: a note edited after the run leaves it the same case. A value is not.
+  nlohmann::json edited = nlohmann::json::parse(readText(study));
+  edited["notes"] = "a note written after the run";
+  std::ofstream(study) << edited.dump(2);
+  Process noted(campaign(runs, "noted"), dir / "noted");
+  REQUIRE(exitedOk(noted.wait(120s)));
+  CHECK(caseOf(dir / "noted.json")["done_before"] == true);
+  edited["tools"][0]["motion"]["depth_mm"] = edited["tools"][0]["motion"]["depth_mm"].get<double>() + 1;
+  std::ofstream(study) << edited.dump(2);
+  Process changed(campaign(runs, "changed"), dir / "changed");
+  const int changed_status = changed.wait(120s);
+  REQUIRE(WIFEXITED(changed_status));
+  CHECK(WEXITSTATUS(changed_status) != 0);
+  CHECK_THAT(changed.err(), Catch::Contains(run_dir.string() + " holds a finished run of another study"));
+  edited["tools"][0]["motion"]["depth_mm"] = edited["tools"][0]["motion"]["depth_mm"].get<double>() - 1;
+  std::ofstream(study) << edited.dump(2);
 
   // The built-in DEM's checkpoint restores bit for bit: the resumed record is the uninterrupted one.
   Process straight(campaign(dir / "straight", "straight"), dir / "straight");

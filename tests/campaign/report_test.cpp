@@ -314,6 +314,17 @@ TEST_CASE("the paper report keeps each evaluation: without its run a case is rep
     CHECK(third["cases"][0]["finished"] == false);
     checkContains(readText(dir / "report" / "paper-reproduction.md"), {"Not used: the kept evaluations of pmma_coupled_30"});
   }
+  SECTION("a kept evaluation stays in use after the study's notes are edited") {
+    nlohmann::json edited = nlohmann::json::parse(readText(studies / "pmma_coupled_30.json"));
+    edited["notes"] = "a note written after the run";
+    fs::create_directories(dir / "edited");
+    std::ofstream(dir / "edited" / "pmma_coupled_30.json") << edited.dump(2);
+    const std::vector<fs::path> edited_files{dir / "edited" / "pmma_coupled_30.json", studies / "s235_dem_18.json"};
+    nlohmann::json third;
+    writeStaged(dir / "report", [&](analysis::StagedOutput& out) { third = writePaperReport(edited_files, options, out); });
+    CHECK(third["cases"][0]["kept"] == true);
+    CHECK(third["cases"][0]["force_mean_N"] == first["cases"][0]["force_mean_N"]);
+  }
   SECTION("a damaged kept evaluation is an error naming the file") {
     std::ofstream(dir / "report" / "paper-runs" / "pmma_coupled_30.json") << R"({"case": "pmma_coupled_30"})";
     analysis::StagedOutput out(dir / "report");

@@ -13,8 +13,8 @@
 //   `checkpoint_every` FEM steps).
 // - Resume: a case whose sensors.json says "complete": true is done and not rerun; one with a
 //   checkpoint resumes from it (on the built-in DEM bit for bit the uninterrupted run); otherwise
-//   it starts. A run directory whose study.json differs from the study it would run now is an
-//   ArgumentError naming the directory (remove it to start that case over). `max_steps` (a
+//   it starts. A run directory whose study.json is another case than the study it would run now
+//   (sameCase: any value but dem.threads and the notes differs) is an ArgumentError naming the directory (remove it to start that case over). `max_steps` (a
 //   shortened run, e.g. CI) marks the case incomplete, so a later call without it continues it.
 // - Soil: every case's settled soil (adapter/settled_soil.hpp) is deposited before any case runs,
 //   one deposition per soil hash, in adapter::defaultSoilDirectory() (cases that differ only in
@@ -104,6 +104,12 @@ nlohmann::json toJson(const CampaignSummary& summary);
 // The text of a case's study as its run directory keeps it (study.json): the study without
 // dem.threads, which may differ between an interrupted call and the one that resumes it.
 std::string caseStudyRecord(const study::Study& study);
+
+// What makes two versions of a study the same case: its record without the free-text `notes`,
+// compact. A note edited after a run neither makes that run "of another study" nor stales its
+// kept evaluation; any value that changes the numbers does.
+std::string caseIdentity(const study::Study& study);
+bool sameCase(const study::Study& a, const study::Study& b);
 
 // A run directory whose sensors.json says "complete": true (a damaged one is not finished).
 bool finishedRun(const std::filesystem::path& run_dir);

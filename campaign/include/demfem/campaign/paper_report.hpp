@@ -15,9 +15,9 @@
 // - Kept evaluations: every evaluated case is also written to `paper-runs/<case>.json` of the
 //   output (its numbers, the curve at one sample per 0.5 mm, the spectrum as means over 50
 //   logarithmic bins per decade from 1 Hz, its wall time and estimate, the label of its runs and
-//   the FNV-1a 64 of its study record, caseStudyRecord()). A case without a finished run takes the
-//   evaluation kept in the output directory by an earlier report, if it is of the same study record
-//   (else the report lists it as not used), so that a report stays whole when only some cases are
+//   the FNV-1a 64 of its study's caseIdentity(), notes left out). A case without a finished run
+//   takes the evaluation kept in the output directory by an earlier report, if it is of the same
+//   case (else the report lists it as not used), so that a report stays whole when only some cases are
 //   rerun, on another machine. Plots always show the kept form, so a report from kept evaluations
 //   equals the one from the runs. A damaged kept file is an analysis::InputError naming it; a case
 //   with neither is listed with its estimated cost only.
