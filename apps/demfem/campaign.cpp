@@ -16,7 +16,6 @@
 #include <fstream>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <memory>
 
 namespace demfem::cli {
@@ -104,12 +103,7 @@ void run(CampaignOptions& o, const std::string& json_target) {
   o.run.estimate_wall_s = estimateWallSeconds;
   auto lines = std::make_shared<ProgressLines>(!o.quiet);
   o.run.on_progress = [lines](const campaign::CampaignProgress& p) { (*lines)(p); };
-  auto deposition = std::make_shared<std::map<std::string, Progress>>();
-  o.run.on_deposit = [deposition, quiet = o.quiet](const std::string& name, double fraction, const std::string& stage_line) {
-    auto& progress = deposition->try_emplace(name, "deposition of the soil of " + name, !quiet).first->second;
-    if (!stage_line.empty() && !quiet) std::cerr << "deposition of the soil of " << name << ": " << stage_line << std::endl;
-    progress.update(fraction);
-  };
+  o.run.on_deposit = depositionProgress(!o.quiet);
   std::signal(SIGINT, onCampaignStop);
   std::signal(SIGTERM, onCampaignStop);
   o.run.stop_requested = [] { return g_campaign_stop.load(); };

@@ -48,13 +48,13 @@ analysis::CptSoil cptSoil(const study::Study& study, const std::vector<adapter::
 
 // --packing: the study's soil file made from the packing study's deposition (campaign/model.hpp,
 // shared packing), and refused when a file made otherwise is already there.
-void sharePacking(const study::Study& study, const std::string& packing_file) {
+void sharePacking(const study::Study& study, const std::string& packing_file, bool quiet) {
   const study::Study packing = loadCheckedStudy(packing_file);
   for (const auto* s : {&packing, &study})
     if (s->soil.deposition_backend != "builtin")
       throw InputError(s->name + ": /soil/deposition/backend: --packing shares a built-in deposition only");
   try {
-    campaign::SoilBinModel(campaign::SoilForce::Draught, packing).prepare({study});
+    campaign::SoilBinModel(campaign::SoilForce::Draught, packing).prepare({study}, depositionProgress(!quiet));
   } catch (const campaign::ArgumentError& e) {
     throw InputError("--packing " + packing_file + ": " + e.what());
   }
@@ -76,7 +76,7 @@ analysis::CptSoil pushStudyCones(const std::string& study_file, const CptOptions
     throw InputError(study_file + ": /kind: demfem cpt runs cone-penetration studies only");
   if (o.threads > 0) study.dem.threads = o.threads;
   study.output.directory = std::filesystem::path(o.output_dir) / "runs" / study.name;  // the backend's VTK files
-  if (!o.packing.empty()) sharePacking(study, o.packing);
+  if (!o.packing.empty()) sharePacking(study, o.packing, o.quiet);
   const BackendEntry& backend = findBackend(o.backend.empty() ? study.dem.backend : o.backend);
   if (!backend.capabilities.simulates_soil)
     throw InputError("backend '" + backend.capabilities.name + "' simulates no soil: cone penetration needs a soil backend");

@@ -10,6 +10,7 @@
 
 #include "demfem/campaign/calibration.hpp"
 #include "demfem/cli/backend_registry.hpp"
+#include "demfem/cli/progress.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -87,6 +88,7 @@ inline void configureFit(campaign::CalibrationOptions& c, const FitOptions& o, c
   c.stroke_ends_with_window = !o.soil.full_stroke;
   c.model_seeds = o.soil.model_seeds;
   c.cache_dir = std::filesystem::path(o.analysis.out_dir) / "runs";
+  c.on_deposit = depositionProgress(!o.quiet);
   std::signal(SIGINT, onFitStopSignal);
   std::signal(SIGTERM, onFitStopSignal);
   c.stop_requested = [] { return fitStopFlag().load(); };

@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
     study::Study packing = case_studies.front();
     for (const study::Study& s : case_studies)
       if (s.dem.dt_fraction == seed_fraction) packing = s;
-    campaign::SoilBinModel(campaign::SoilForce::LoadCell, packing).prepare(case_studies);
+    campaign::SoilBinModel(campaign::SoilForce::LoadCell, packing).prepare(case_studies, cli::depositionProgress(true));
     campaign::CampaignOptions o;
     o.directory = fs::path(work) / "runs";
     o.jobs = jobs;

@@ -103,7 +103,7 @@ class Evaluator {
     std::vector<study::Study> to_run;
     for (const auto& [v, key] : items)
       if (study::Study s = studyOf(*v, *key); !cache_ || !cache_->find(model_.name(), s, *key)) to_run.push_back(std::move(s));
-    if (!to_run.empty()) model_.prepare(to_run);
+    if (!to_run.empty()) model_.prepare(to_run, options_.on_deposit);
     std::vector<analysis::Recording> out(items.size());
     std::vector<std::exception_ptr> errors(items.size());
     std::atomic<std::size_t> next{0};

@@ -96,7 +96,7 @@ analysis::Recording draughtRun(const study::Study& study) {
 }  // namespace
 
 analysis::Recording SoilBinModel::run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) {
-  prepareSoil(study);
+  prepareSoil(study, {});  // normally made by prepare() already
   study::Study run_study = study;
   run_study.output.directory = scratch;  // the DEM's files (output.vtk_every > 0) in this run's directory, not a shared one
   analysis::Recording recording;
@@ -117,25 +117,35 @@ std::string SoilBinModel::name() const {
   return {};
 }
 
-void SoilBinModel::prepare(const std::vector<study::Study>& case_studies) {
-  std::set<std::string> done;
-  for (const study::Study& s : case_studies)
-    if (done.insert(study::soilHash(s)).second) prepareSoil(s);
+namespace {
+
+void deposit(const study::Study& s, const DepositionProgress& on_deposit) {
+  builtin::ensureSettledSoil(s, [&](double fraction, const std::string& stage_line) {
+    if (on_deposit) on_deposit(s.name, fraction, stage_line);
+  });
 }
 
-void SoilBinModel::prepareSoil(const study::Study& s) const {
+}  // namespace
+
+void SoilBinModel::prepare(const std::vector<study::Study>& case_studies, const DepositionProgress& on_deposit) {
+  std::set<std::string> done;
+  for (const study::Study& s : case_studies)
+    if (done.insert(study::soilHash(s)).second) prepareSoil(s, on_deposit);
+}
+
+void SoilBinModel::prepareSoil(const study::Study& s, const DepositionProgress& on_deposit) const {
   const auto file = adapter::settledSoilFile(s, adapter::defaultSoilDirectory());
   if (!std::filesystem::exists(file)) {
     if (packing_)
-      relabelPacking(s, file);
+      relabelPacking(s, file, on_deposit);
     else
-      builtin::ensureSettledSoil(s);
+      deposit(s, on_deposit);
   }
   const std::string message = adapter::unsettledSoilMessage(file, adapter::readSettledSoil(file, s).settling);
   if (!message.empty() && !allow_unsettled_soil_) throw ArgumentError("study '" + s.name + "': " + message);
 }
 
-void SoilBinModel::relabelPacking(const study::Study& s, const std::filesystem::path& file) const {
+void SoilBinModel::relabelPacking(const study::Study& s, const std::filesystem::path& file, const DepositionProgress& on_deposit) const {
   const auto dir = adapter::defaultSoilDirectory();
   study::Study reference = *packing_;
   reference.soil.deposition_seed = s.soil.deposition_seed;
@@ -146,7 +156,7 @@ void SoilBinModel::relabelPacking(const study::Study& s, const std::filesystem::
     throw ArgumentError("shared soil packing: study '" + s.name + "' changes the bin, fill height or particle sizes of '" + reference.name +
                         "', whose deposition it would reuse");
   const auto reference_file = adapter::settledSoilFile(reference, dir);
-  if (!std::filesystem::exists(reference_file)) builtin::ensureSettledSoil(reference);
+  if (!std::filesystem::exists(reference_file)) deposit(reference, on_deposit);
   adapter::SettledSoil soil = adapter::readSettledSoil(reference_file, reference);
   soil.soil_hash = study::soilHash(s);
   for (auto& p : soil.particles) p.layer = builtin::layerAt(s.soil, p.x_m[1]);

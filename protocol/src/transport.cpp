@@ -4,6 +4,7 @@
 #include <zmq_addon.hpp>
 
 #include <atomic>
+#include <cstdint>
 #include <cstring>
 #include <exception>
 #include <fstream>
@@ -222,7 +223,10 @@ ClientSocket::ClientSocket(Context& shared, const std::string& endpoint, std::ch
     sockets_->socket.set(zmq::sockopt::curve_publickey, security->client.public_key);
     sockets_->socket.set(zmq::sockopt::curve_secretkey, security->client.secret_key);
   }
-  const std::string monitor_endpoint = "inproc://demfem-client-monitor-" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
+  // A name never used before in this process: a socket at the address of a closed one would find its
+  // monitor endpoint still bound, for ZeroMQ unbinds it asynchronously (EADDRINUSE).
+  static std::atomic<std::uint64_t> monitors{0};
+  const std::string monitor_endpoint = "inproc://demfem-client-monitor-" + std::to_string(++monitors);
   if (zmq_socket_monitor(sockets_->socket.handle(), monitor_endpoint.c_str(),
                          ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
                              ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_DISCONNECTED) != 0)

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <iostream>
 #include <sstream>
 #include <thread>
 
@@ -48,4 +49,16 @@ TEST_CASE("a disabled or quick phase prints nothing", "[apps]") {
   quick.update(0.5);
   quick.finish();
   CHECK(out.str().empty());
+}
+
+TEST_CASE("deposition progress names the study whose soil it deposits and prints its stage lines as they come", "[apps]") {
+  std::ostringstream err;
+  std::streambuf* const saved = std::cerr.rdbuf(err.rdbuf());
+  const auto report = demfem::cli::depositionProgress(true);
+  report("pmma_coupled_18", 0.2, "stage 1: kinetic energy 3e-3 J");
+  report("pmma_coupled_18", 0.4, "");
+  const auto quiet = demfem::cli::depositionProgress(false);
+  quiet("s235_dem_42", 0.5, "stage 1: kinetic energy 2e-3 J");
+  std::cerr.rdbuf(saved);
+  CHECK(err.str() == "deposition of the soil of pmma_coupled_18: stage 1: kinetic energy 3e-3 J\n");
 }

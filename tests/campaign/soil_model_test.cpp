@@ -60,10 +60,10 @@ TEST_CASE("the soil-bin model refuses an unsettled soil, naming the study, the f
     soil.particles.push_back({{0.02 + 0.012 * i, study.soil.diameter_max_m / 2, 0.02}, study.soil.diameter_max_m / 2, 0});
   const auto file = adapter::settledSoilFile(study, dir.path() / "soil");
   adapter::writeSettledSoil(file, soil);
-  CHECK_THROWS_WITH(campaign::SoilBinModel().prepare({study}),
+  CHECK_THROWS_WITH(campaign::SoilBinModel().prepare({study}, {}),
                     Catch::Contains("study '" + study.name + "'") && Catch::Contains(file.string()) &&
                         Catch::Contains("final settling phase hit its time cap") && Catch::Contains("--allow-unsettled-soil"));
-  CHECK_NOTHROW(campaign::SoilBinModel(campaign::SoilForce::LoadCell, std::nullopt, true).prepare({study}));
+  CHECK_NOTHROW(campaign::SoilBinModel(campaign::SoilForce::LoadCell, std::nullopt, true).prepare({study}, {}));
   if (previous)
     ::setenv("DEMFEM_SOIL_DIR", restore.c_str(), 1);
   else

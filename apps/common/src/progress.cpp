@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
+#include <memory>
 
 namespace demfem::cli {
 
@@ -67,6 +69,20 @@ void Progress::finish(const std::string& detail) {
   if (!detail.empty()) line += " (" + detail + ")";
   if (terminal_) out_ << "\r\033[K";
   out_ << line << std::endl;
+}
+
+std::function<void(const std::string&, double, const std::string&)> depositionProgress(bool enabled) {
+  auto lines = std::make_shared<std::map<std::string, Progress>>();
+  return [lines, enabled](const std::string& name, double fraction, const std::string& stage_line) {
+    if (!enabled) return;
+    const std::string phase = "deposition of the soil of " + name;
+    Progress& progress = lines->try_emplace(name, phase).first->second;
+    if (!stage_line.empty()) std::cerr << phase << ": " << stage_line << std::endl;
+    if (fraction >= 1)
+      progress.finish();
+    else
+      progress.update(fraction);
+  };
 }
 
 }  // namespace demfem::cli

@@ -86,7 +86,7 @@ TEST_CASE("CPR of a settled small bin grows with depth and the layered soil's ex
   std::filesystem::create_directories(dir);
   ::setenv("DEMFEM_SOIL_DIR", dir.c_str(), 1);
   const study::Study layered_study = coneStudy(true), unlayered_study = coneStudy(false);
-  campaign::SoilBinModel(campaign::SoilForce::Draught, unlayered_study).prepare({unlayered_study, layered_study});
+  campaign::SoilBinModel(campaign::SoilForce::Draught, unlayered_study).prepare({unlayered_study, layered_study}, {});
   const auto layered = penetrate(layered_study);
   const auto unlayered = penetrate(unlayered_study);
   INFO("layered CPR at the deepest grid depth " << layered.mean_Pa.back() << " Pa, non-layered " << unlayered.mean_Pa.back() << " Pa");

@@ -90,6 +90,7 @@ struct CalibrationOptions {
   bool model_scatters_like_repeats = true;
   std::filesystem::path cache_dir;
   std::function<void(const CalibrationProgress&)> on_progress;
+  DepositionProgress on_deposit;  // the model's depositions before an evaluation (Model::prepare)
   std::function<bool()> stop_requested;
 };
 

@@ -53,6 +53,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -70,6 +71,10 @@ study::Study caseStudy(const nlohmann::ordered_json& study_json, const std::stri
 // The case the study itself describes (its weight or its tool depth), with the study's first tool name.
 analysis::CaseKey studyCase(const study::Study& study);
 
+// Progress of a deposition a model makes: the study whose soil it deposits, the fraction done, and
+// the deposition's stage line (a settling report; empty between them).
+using DepositionProgress = std::function<void(const std::string& study_name, double fraction, const std::string& stage_line)>;
+
 class Model {
  public:
   virtual ~Model() = default;
@@ -80,8 +85,11 @@ class Model {
   // Identifies the model's code path in the run cache (a change of model changes every key).
   virtual std::string name() const = 0;
   // Called once per evaluation with the studies of the cases about to run (possibly concurrently):
-  // work they share is done here, once. Throws on failure. Default: nothing.
-  virtual void prepare(const std::vector<study::Study>& case_studies) { (void)case_studies; }
+  // work they share is done here, once, its depositions reported through `on_deposit` (may be
+  // empty). Throws on failure. Default: nothing.
+  virtual void prepare(const std::vector<study::Study>& case_studies, const DepositionProgress& on_deposit) {
+    (void)case_studies, (void)on_deposit;
+  }
 };
 
 class WeightDropModel final : public Model {
@@ -108,12 +116,12 @@ class SoilBinModel final : public Model {
   // Throws ArgumentError for SoilForce::Draught with a deformable tool.
   analysis::Recording run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path& scratch) override;
   std::string name() const override;
-  void prepare(const std::vector<study::Study>& case_studies) override;
+  void prepare(const std::vector<study::Study>& case_studies, const DepositionProgress& on_deposit) override;
 
  private:
-  void prepareSoil(const study::Study& study) const;
+  void prepareSoil(const study::Study& study, const DepositionProgress& on_deposit) const;
   // Writes `file`: the packing study's deposition at the study's seed, relabelled (see contract).
-  void relabelPacking(const study::Study& study, const std::filesystem::path& file) const;
+  void relabelPacking(const study::Study& study, const std::filesystem::path& file, const DepositionProgress& on_deposit) const;
   SoilForce force_;
   std::optional<study::Study> packing_;
   bool allow_unsettled_soil_ = false;

@@ -37,6 +37,7 @@
 // - Units: seconds of wall time; steps are FEM steps.
 #pragma once
 
+#include "demfem/campaign/model.hpp"
 #include "demfem/study/study.hpp"
 
 #include <nlohmann/json.hpp>
@@ -84,7 +85,7 @@ struct CampaignOptions {
   std::function<void(const CampaignProgress&)> on_progress;     // every 0.2 s, from the calling thread
   // A soil's deposition: the fraction done and, at the end of each settling stage, its summary line
   // (empty otherwise; builtin::DepositProgress).
-  std::function<void(const std::string& case_name, double fraction, const std::string& stage_line)> on_deposit;
+  DepositionProgress on_deposit;  // study_name: the case name
   bool allow_unsettled_soil = false;
   std::function<bool()> stop_requested;
 };

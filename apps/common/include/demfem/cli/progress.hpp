@@ -10,6 +10,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <ostream>
 #include <string>
 
@@ -44,5 +45,11 @@ class Progress {
   bool printed_ = false;
   bool finished_ = false;
 };
+
+// The progress of the soil depositions a command waits for, as a callback of the campaign
+// library's DepositionProgress: one Progress per study ("deposition of the soil of NAME"), ended
+// when its fraction reaches 1, and the deposition's stage lines printed as they come. `enabled`
+// false: prints nothing. Copies of the callback share the lines.
+std::function<void(const std::string& study_name, double fraction, const std::string& stage_line)> depositionProgress(bool enabled);
 
 }  // namespace demfem::cli
