@@ -82,11 +82,19 @@ int main(int argc, char** argv) {
     o.jobs = jobs;
     o.threads = threads;
     cli::Progress progress("convergence");
-    o.on_progress = [&progress](const campaign::CampaignProgress& p) {
-      double done = 0;
-      for (const auto& c : *p.cases)
-        done += c.state == campaign::CaseState::Done ? 1.0 : (c.total_steps > 0 ? double(c.step) / double(c.total_steps) : 0.0);
-      progress.update(done / static_cast<double>(p.cases->size()), std::to_string(p.cases->size()) + " runs");
+    // The runs of this call, each weighed by its cost (DEM steps go as 1 / fraction); runs kept from
+    // an earlier call are not part of the time left.
+    o.on_progress = [&progress, &variants](const campaign::CampaignProgress& p) {
+      double done = 0, total = 0;
+      int runs = 0;
+      for (std::size_t i = 0; i < p.cases->size(); ++i) {
+        const campaign::CaseStatus& c = (*p.cases)[i];
+        if (c.done_before) continue;
+        const double cost = 1.0 / variants[i].first;
+        total += cost, ++runs;
+        done += cost * (c.state == campaign::CaseState::Done ? 1.0 : (c.total_steps > 0 ? double(c.step) / double(c.total_steps) : 0.0));
+      }
+      if (total > 0) progress.update(done / total, std::to_string(runs) + " runs to make");
     };
     std::signal(SIGINT, onStop);
     o.stop_requested = [] { return g_stop.load(); };
