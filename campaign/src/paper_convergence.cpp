@@ -62,6 +62,22 @@ double pooledScatter(const std::map<double, SeedRuns>& by_fraction, double Conve
   return dof > 0 ? std::sqrt(ss / dof) : 0;
 }
 
+// Richardson over the three finest fractions (see contract); `fractions` coarsest first.
+std::optional<ForceExtrapolation> extrapolatedForce(const std::vector<FractionSummary>& fractions) {
+  if (fractions.size() < 3) return std::nullopt;
+  const FractionSummary& coarse = fractions[fractions.size() - 3];
+  const FractionSummary& middle = fractions[fractions.size() - 2];
+  const FractionSummary& finest = fractions.back();
+  const auto halved = [](double coarser, double finer) { return std::fabs(coarser - 2 * finer) <= 1e-9 * coarser; };
+  if (!halved(coarse.dt_fraction, middle.dt_fraction) || !halved(middle.dt_fraction, finest.dt_fraction)) return std::nullopt;
+  const double c1 = coarse.force_N.change, c2 = middle.force_N.change;
+  const double first_halving_se = std::hypot(coarse.force_N.change_se, middle.force_N.change_se);
+  if (std::fabs(c2) <= 2 * middle.force_N.change_se || std::fabs(c1 - c2) <= 2 * first_halving_se) return std::nullopt;
+  const double r = c2 / (c1 - c2);
+  if (!(r > 0 && r < 1)) return std::nullopt;
+  return ForceExtrapolation{r, std::log2(1 / r), finest.force_N.mean - c2 * r / (1 - r)};
+}
+
 }  // namespace
 
 nlohmann::ordered_json reducedStudy(const nlohmann::ordered_json& base, double length_mm, double width_mm, double stroke_mm,
@@ -123,6 +139,7 @@ ConvergenceSummary summarize(std::vector<ConvergencePoint> points, std::string r
     }
     s.fractions.insert(s.fractions.begin(), f);
   }
+  s.force_extrapolation = extrapolatedForce(s.fractions);
   return s;
 }
 
@@ -146,7 +163,11 @@ nlohmann::json toJson(const ConvergenceSummary& s) {
           {"deformation_scatter_mm", s.deformation_scatter_mm},
           {"fit_b_scatter", s.fit_b_scatter},
           {"fractions", fractions},
-          {"converged_fraction", s.converged_fraction ? nlohmann::json(*s.converged_fraction) : nlohmann::json(nullptr)}};
+          {"converged_fraction", s.converged_fraction ? nlohmann::json(*s.converged_fraction) : nlohmann::json(nullptr)},
+          {"force_extrapolation", s.force_extrapolation ? nlohmann::json{{"halving_ratio", s.force_extrapolation->halving_ratio},
+                                                                          {"order", s.force_extrapolation->order},
+                                                                          {"force_N", s.force_extrapolation->force_N}}
+                                                        : nlohmann::json(nullptr)}};
 }
 
 ConvergenceSummary convergenceFromJson(const nlohmann::json& doc) {
@@ -201,6 +222,15 @@ std::string markdown(const ConvergenceSummary& s) {
     md << "No coarser fraction changes force, deformation and fit exponent against the finest step by at most one seed scatter "
           "and two standard errors (over at least two seeds): the step is not shown converged at these fractions.";
   md << '\n';
+  if (const auto& x = s.force_extrapolation) {
+    md << "\nThe force's change per halving of the step shrinks by " << formatNumber("%.2f", x->halving_ratio)
+       << " from one halving to the next, an error going as dt^" << formatNumber("%.2f", x->order)
+       << "; extrapolated that way (Richardson), the force at dt -> 0 is " << formatNumber("%.3g", x->force_N) << " N, against which";
+    for (const FractionSummary& f : s.fractions)
+      md << (&f == &s.fractions.front() ? " " : ", ") << formatNumber("%g", f.dt_fraction) << " is "
+         << formatNumber("%+.1f", 100 * (f.force_N.mean / x->force_N - 1)) << " %";
+    md << ".\n";
+  }
   return md.str();
 }
 

@@ -88,3 +88,30 @@ TEST_CASE("one seed per fraction gives no convergence verdict", "[campaign]") {
   CHECK(s.force_scatter_N == 0);
   CHECK_FALSE(s.converged_fraction);
 }
+
+TEST_CASE("the force at dt -> 0 is extrapolated from three halvings whose changes the seeds resolve, and only then", "[campaign]") {
+  // F = 10 - 3 sqrt(f) N at every seed, with seed offsets the pairing removes: r = 2^-0.5, p = 0.5, F0 = 10.
+  const auto points = [](double noise) {
+    std::vector<ConvergencePoint> v;
+    for (double f : {0.05, 0.025, 0.0125})
+      for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+        const double jitter = f == 0.0125 ? 0 : noise * (seed == 1 ? 1 : -1);
+        v.push_back(point(f, seed, 10 - 3 * std::sqrt(f) + 0.2 * static_cast<double>(seed) + jitter, 0.07, -1.5));
+      }
+    return v;
+  };
+  const ConvergenceSummary s = summarize(points(0), "test");
+  REQUIRE(s.force_extrapolation);
+  CHECK(s.force_extrapolation->halving_ratio == Approx(std::sqrt(0.5)).epsilon(1e-9));
+  CHECK(s.force_extrapolation->order == Approx(0.5).epsilon(1e-9));
+  CHECK(s.force_extrapolation->force_N == Approx(10 + 0.3).epsilon(1e-9));  // the seeds' mean offset is 0.3 N
+  CHECK_THAT(markdown(s), Catch::Contains("an error going as dt^0.50"));
+  CHECK(convergenceFromJson(toJson(s)).force_extrapolation->force_N == Approx(10.3).epsilon(1e-9));
+  // Halvings that move the force by 0.20 and 0.14 N under standard errors of 0.3 N: no extrapolation.
+  CHECK_FALSE(summarize(points(0.3), "test").force_extrapolation);
+  // A change that grows at the finer halving has no limit to extrapolate to.
+  std::vector<ConvergencePoint> growing = points(0);
+  for (ConvergencePoint& p : growing)
+    if (p.dt_fraction == 0.0125) p.force_mean_N += 1;
+  CHECK_FALSE(summarize(growing, "test").force_extrapolation);
+}

@@ -22,6 +22,13 @@
 //   fraction coarser than the finest that is, and every finer one too (none without a scatter).
 //   With many seeds the second condition asks for a bias below what they resolve: it is
 //   conservative, never lax.
+// - Extrapolation (force only): over the three finest fractions when each is half the one before,
+//   from the paired changes c1 (coarsest of the three) and c2 against the finest: the change per
+//   halving shrinks by r = c2 / (c1 - c2). When 0 < r < 1 and both halvings' changes exceed two
+//   standard errors (c2's; c1 - c2 taken with sqrt(se1^2 + se2^2)), the force is modelled as
+//   F(dt) = F0 + C dt^p (Richardson): order p = log2(1 / r), F0 = finest mean - c2 r / (1 - r).
+//   Otherwise none: a change the seeds cannot resolve, or one that does not shrink, says nothing of
+//   the limit.
 // - markdown(): the table and the verdict, for the bench's output and the report.
 #pragma once
 
@@ -56,12 +63,20 @@ struct FractionSummary {
   bool within = false;
 };
 
+// The force at dt -> 0 from the three finest fractions (see contract).
+struct ForceExtrapolation {
+  double halving_ratio = 0;  // r: the change of the finer halving over the coarser one's
+  double order = 0;          // p of the error C dt^p
+  double force_N = 0;        // F0
+};
+
 struct ConvergenceSummary {
   std::vector<ConvergencePoint> points;
   std::vector<FractionSummary> fractions;  // coarsest first
   double force_scatter_N = 0, deformation_scatter_mm = 0, fit_b_scatter = 0;
   std::size_t scatter_seeds = 0;  // distinct seeds among the finished runs
   std::optional<double> converged_fraction;
+  std::optional<ForceExtrapolation> force_extrapolation;
   std::string reduced_case;  // what was run (bin, stroke, particles), for the table's caption
 };
 
