@@ -247,14 +247,21 @@ std::vector<Case> loadCases(const std::vector<fs::path>& files, const CampaignOp
 
 }  // namespace
 
-std::string caseStudyRecord(const study::Study& s) {
+namespace {
+
+// The study as a case records it: without dem.threads, which does not change a run's numbers.
+nlohmann::ordered_json caseRecordJson(const study::Study& s) {
   nlohmann::ordered_json doc = study::toJson(s);
   if (doc.contains("dem")) doc["dem"].erase("threads");
-  return doc.dump(2) + '\n';
+  return doc;
 }
 
+}  // namespace
+
+std::string caseStudyRecord(const study::Study& s) { return caseRecordJson(s).dump(2) + '\n'; }
+
 std::string caseIdentity(const study::Study& s) {
-  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(caseStudyRecord(s));
+  nlohmann::ordered_json doc = caseRecordJson(s);
   doc.erase("notes");
   return doc.dump();
 }

@@ -76,6 +76,15 @@ AppliesWhen rollingHasFriction() {
           "`rolling` not `none`"};
 }
 
+AppliesWhen rollingHasSpinScale() {
+  return {[](const KeyContext& c) -> Applies {
+            if (!c.rolling) return {Applies::Unknown, {}};
+            if (rollingUsesSpinScale(*c.rolling)) return {};
+            return {Applies::No, "only used by soil.contact.rolling \"edem-standard\", not " + inQuotes(nameOf(kRollingModels, *c.rolling))};
+          },
+          "`rolling` = `edem-standard`"};
+}
+
 AppliesWhen cohesionHasEnergy() {
   return {[](const KeyContext& c) -> Applies {
             if (!c.cohesion) return {Applies::Unknown, {}};
@@ -356,6 +365,10 @@ const Section<ContactModel>& contactSection() {
         "cohesion law (F = k A)"},
        {"rolling", choice(&ContactModel::rolling, kRollingModels), Need::Required, {}, {}, always(), {},
         "rolling resistance law"},
+       {"rolling_regularisation_fraction", &ContactModel::rolling_regularisation_fraction, Need::Optional, leftOpen(0.0, 1.0),
+        {}, rollingHasSpinScale(), {},
+        "the DEM step at this fraction of the stiffest spring's critical step sets the rolling law's spin scale at every "
+        "shorter step (docs/builtin-dem.md)"},
        {"tangential_history", &ContactModel::tangential_history, Need::Optional, {}, {}, always(), {},
         "Coulomb friction with a tangential spring (history)"},
        {"stiffness_factor", &ContactModel::stiffness_factor, Need::Required, leftOpen(0.0, 100.0), {},

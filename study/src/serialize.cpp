@@ -146,6 +146,11 @@ std::string soilHash(const Study& study) {
   for (const Layer& l : soil.layers) used.insert(l.material);
   nlohmann::json canonical;  // std::map objects: keys sorted
   canonical["soil"] = nlohmann::json::parse(soilJson(soil, contextOf(study)).dump());
+  // At its default the rolling regularisation does not enter: the deposition steps at a tenth of the
+  // critical step or more, where the spin scale follows the step, so soils deposited before the key
+  // existed stay valid.
+  if (soil.contact.rolling_regularisation_fraction == ContactModel{}.rolling_regularisation_fraction)
+    canonical["soil"]["contact"].erase("rolling_regularisation_fraction");
   nlohmann::json& materials = canonical["soil"]["materials"];
   nlohmann::json soil_materials = nlohmann::json::array();
   for (const auto& m : materials)

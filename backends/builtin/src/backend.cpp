@@ -38,6 +38,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
     }
     // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
     sim_.setTimeStep(study::demStepDividing(physics::demTimeStep(study).step_s, study.fem.dt_s));
+    sim_.setRollingRegularisationStep(physics::rollingRegularisationStep(study));
     if (study.output.vtk_every > 0) {
       vtk_interval_ = study.output.vtk_every * study.fem.dt_s;
       next_vtk_ = sim_.time();

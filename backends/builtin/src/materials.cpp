@@ -109,4 +109,9 @@ void DemSimulation::setTimeStep(double dt) {
   dt_ = dt;
 }
 
+void DemSimulation::setRollingRegularisationStep(double step_s) {
+  if (!(step_s >= 0)) throw std::invalid_argument("builtin DEM: rolling regularisation step must be >= 0");
+  rolling_step_s_ = step_s;
+}
+
 }  // namespace demfem::builtin

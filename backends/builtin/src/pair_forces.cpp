@@ -41,7 +41,7 @@ template <study::NormalModel N, study::RollingModel R>
 void DemSimulation::pairLoop(int part) {
   const std::size_t n = particleCount();
   const int H = layout_.size;
-  const double dt = dt_;
+  const double dt = dt_, rolling_dt = rollingStep();
   constexpr bool kRollingNorm = R == study::RollingModel::Cdt;  // the law needs |w_i - w_j|
   PartState& ts = part_[part];
   // Part `part` owns rows [lo, hi); it writes particles [lo, window_end) only (half list: j > i),
@@ -119,7 +119,7 @@ void DemSimulation::pairLoop(int part) {
         kin.inv_ij = inv_inertia_[j];
         if (kin.delta > local_max) local_max = kin.delta;
         if (kin.delta > overlapLimitFraction() * std::min(ri, rj) && bad < 0) bad = static_cast<std::int64_t>(i);
-        const ContactResult res = contactForce<N, R>(model_, layout_, laws_i[material_[j]], nb_stiff_[s], kin, dt,
+        const ContactResult res = contactForce<N, R>(model_, layout_, laws_i[material_[j]], nb_stiff_[s], kin, dt, rolling_dt,
                                                      nb_hist_.data() + static_cast<std::size_t>(s) * H, false);
         for (int c = 0; c < 3; ++c) {
           fi[c] += res.force[c];

@@ -137,6 +137,7 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
       // needs and would make the full bin take hours to settle.
       sim.setTimeStep(std::max(physics::demTimeStep(study).step_s,
                                kDepositionStepFraction * physics::criticalStep(study, study::TimeStepCriterion::StiffestSpring).step_s));
+      sim.setRollingRegularisationStep(physics::rollingRegularisationStep(study));
       dt_set = true;
     }
     // The highest particle of the batch falls from its lattice level onto the pack.

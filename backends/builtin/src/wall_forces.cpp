@@ -228,7 +228,7 @@ void DemSimulation::wallLoop(int part) {
         ts.wall_bad_wall = touch[a].wall;
       }
       const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wallMaterial(touch[a].wall)),
-                                                   wc.stiffness, k, dt_, layout_.size ? wc.hist : nullptr, true);
+                                                   wc.stiffness, k, dt_, rollingStep(), layout_.size ? wc.hist : nullptr, true);
       for (int c = 0; c < 3; ++c) {
         f_[3 * i + c] += res.force[c];
         t_[3 * i + c] += res.torque_i[c];

@@ -247,6 +247,34 @@ TEST_CASE("edem-standard rolling friction stops a rolling sphere at v0^2 / (10/7
   CHECK(std::fabs(s.v[0]) < 1e-9);
 }
 
+TEST_CASE("below the regularisation step, edem-standard spin decays as exp(-t / (12 dt_r)) at any DEM step", "[builtin]") {
+  // A sphere resting on the plane, spinning about the normal below the law's spin scale: the torque
+  // -mu_r Fn R w / w0 with w0 = 12 mu_r Fn R dt_r / I is -I w / (12 dt_r), whatever Fn, and the
+  // spin about the normal moves no contact point, so w decays as exp(-t / (12 dt_r)).
+  constexpr double kRegularisation = 1e-4, kSpin = 0.1;  // s; rad/s, under w0 = 30 mu_r g dt_r / R = 0.59
+  const auto spinAfter = [](double dt, double regularisation, double t) {
+    SoilParameters p;
+    p.rolling_friction = kRollingFriction;
+    p.model.rolling = study::RollingModel::EdemStandard;
+    const double m = sphereMass(p.density, kR);
+    DemSimulation sim(makeSoil(p), box(0.5), 1);
+    sim.addPlane({{0, 0, 0}, {0, 1, 0}, 1});
+    sim.addParticle({{0, kR - m * kG / (5 * kR * p.yield), 0}, {0, 0, 0}, {0, kSpin, 0}, kR, 0, 0});
+    sim.setTimeStep(dt);
+    sim.setRollingRegularisationStep(regularisation);
+    sim.run(std::lround(t / dt));
+    return sim.particle(0).w[1];
+  };
+  const double t = 12 * kRegularisation;
+  const double coarse = spinAfter(2.5e-5, kRegularisation, t), fine = spinAfter(1e-5, kRegularisation, t);
+  // Tolerance 1.5 %: explicit Euler's (1 - dt / (12 dt_r))^n is 1.0 % (dt 2.5e-5) and 0.4 % (1e-5) below.
+  CHECK(coarse == Approx(kSpin * std::exp(-1.0)).epsilon(0.015));
+  CHECK(fine == Approx(kSpin * std::exp(-1.0)).epsilon(0.015));
+  // Without a regularisation step the scale follows the DEM step: the spin decays 12 dt_r / (12 dt)
+  // times faster, the dependence on the step the regularisation step removes.
+  CHECK(spinAfter(1e-5, 0, t) < 1e-3 * fine);
+}
+
 TEST_CASE("cohesive pair needs k_coh pi R* delta0 to separate after loading to delta_max", "[builtin]") {
   // EDEM hysteretic + linear cohesion: on unloading Fn = K2 (delta - delta0) - k pi R* delta, so the
   // largest tension along the separation path is at delta0 = delta_max (1 - e^2): k pi R* delta0.
@@ -271,7 +299,7 @@ TEST_CASE("cohesive pair needs k_coh pi R* delta0 to separate after loading to d
     k.delta = step <= 2000 ? delta_max * step / 2000 : delta_max * (4000 - step) / 2000;
     k.r = 2 * kR - k.delta;
     const auto res = contactForce<study::NormalModel::EdemHysteretic, study::RollingModel::None>(model, layout, law, s, k,
-                                                                                                 1e-6, hist.data(), false);
+                                                                                                 1e-6, 1e-6, hist.data(), false);
     max_tension = std::max(max_tension, -res.normal_force);
   }
   const double delta0 = delta_max * (1 - law.restitution * law.restitution);

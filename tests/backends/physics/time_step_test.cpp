@@ -90,3 +90,18 @@ TEST_CASE("an explicit dem.dt_s is kept and its margin to the stiffest spring re
   s.dem.dt_fraction = 1.5;
   CHECK_THROWS_WITH(physics::demTimeStep(s), Catch::Contains("/dem/dt_fraction"));
 }
+
+TEST_CASE("the rolling regularisation step is the DEM step at its fraction, and stays when the DEM step is halved", "[dem_physics]") {
+  study::Study s = twoMaterialStudy({"steel", 7850, 2e11, 0.3, 0}, 0.4);
+  s.fem.dt_s = 9.2e-4;  // a FEM step the DEM step does not divide: both are shortened alike
+  s.dem.dt_fraction = s.soil.contact.rolling_regularisation_fraction;
+  const double dem_step = study::demStepDividing(physics::demTimeStep(s).step_s, s.fem.dt_s);
+  // The same number, not merely close: at the paper cases' step the law is the one it was before
+  // the regularisation had a step of its own.
+  CHECK(physics::rollingRegularisationStep(s) == dem_step);
+  s.dem.dt_fraction /= 2;
+  CHECK(physics::rollingRegularisationStep(s) == dem_step);
+  CHECK(study::demStepDividing(physics::demTimeStep(s).step_s, s.fem.dt_s) < 0.51 * dem_step);
+  s.soil.contact.rolling_regularisation_fraction = 0;
+  CHECK_THROWS_WITH(physics::rollingRegularisationStep(s), Catch::Contains("/soil/contact/rolling_regularisation_fraction"));
+}

@@ -14,8 +14,9 @@
 // - Resume: a case whose sensors.json says "complete": true is done and not rerun; one with a
 //   checkpoint resumes from it (on the built-in DEM bit for bit the uninterrupted run); otherwise
 //   it starts. A run directory whose study.json is another case than the study it would run now
-//   (sameCase: any value but dem.threads and the notes differs) is an ArgumentError naming the directory (remove it to start that case over). `max_steps` (a
-//   shortened run, e.g. CI) marks the case incomplete, so a later call without it continues it.
+//   (sameCase: any value but dem.threads and the notes differs) is an ArgumentError naming the
+//   directory (remove it to start that case over). `max_steps` (a shortened run, e.g. CI) marks
+//   the case incomplete, so a later call without it continues it.
 // - Soil: every case's settled soil (adapter/settled_soil.hpp) is deposited before any case runs,
 //   one deposition per soil hash, in adapter::defaultSoilDirectory() (cases that differ only in
 //   depth, velocity or tool share it). A soil that is not settled (adapter::unsettledReason) is an

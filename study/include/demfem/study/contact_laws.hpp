@@ -62,26 +62,31 @@ struct Sjkr2CohesionLaw {
   static constexpr bool energy_density = true;
 };
 
-// Rolling-resistance laws; `friction` says whether interactions[].rolling_friction applies.
+// Rolling-resistance laws; `friction` says whether interactions[].rolling_friction applies,
+// `spin_scale` whether soil.contact.rolling_regularisation_fraction does.
 struct NoRollingLaw {
   static constexpr RollingModel model = RollingModel::None;
   static constexpr std::string_view name = "none";
   static constexpr bool friction = false;
+  static constexpr bool spin_scale = false;
 };
 struct EdemStandardRollingLaw {
   static constexpr RollingModel model = RollingModel::EdemStandard;
   static constexpr std::string_view name = "edem-standard";
   static constexpr bool friction = true;
+  static constexpr bool spin_scale = true;
 };
 struct CdtRollingLaw {
   static constexpr RollingModel model = RollingModel::Cdt;
   static constexpr std::string_view name = "cdt";
   static constexpr bool friction = true;
+  static constexpr bool spin_scale = false;
 };
 struct EpsdRollingLaw {
   static constexpr RollingModel model = RollingModel::Epsd;
   static constexpr std::string_view name = "epsd";
   static constexpr bool friction = true;
+  static constexpr bool spin_scale = false;
 };
 
 // Calls `f` with the trait of `model` and returns what it returns.
@@ -133,6 +138,9 @@ inline bool cohesionUsesEnergyDensity(CohesionModel model) {
 }
 inline bool rollingUsesFriction(RollingModel model) {
   return withRollingLaw(model, [](auto law) { return decltype(law)::friction; });
+}
+inline bool rollingUsesSpinScale(RollingModel model) {
+  return withRollingLaw(model, [](auto law) { return decltype(law)::spin_scale; });
 }
 
 }  // namespace demfem::study

@@ -75,6 +75,10 @@ struct ContactModel {
   double stiffness_factor = 0.85;
   // EDEM "damping factor" (Table 2 D_n): viscous c = 2 D_n sqrt(m* k) (documented assumption).
   double damping_factor = 0.5;
+  // edem-standard rolling: the DEM step at this fraction of the stiffest spring's critical step sets
+  // the law's spin scale at every shorter step, so that below it the law no longer changes with the
+  // step (physics::rollingRegularisationStep, docs/builtin-dem.md "Rolling friction at rest").
+  double rolling_regularisation_fraction = 0.025;
   // LIGGGHTS hooke / hooke/hysteresis parameters (LIGGGHTS 3.8 names).
   double characteristic_velocity_m_s = 0.1;
   double coefficient_max_elastic_stiffness = 2.0;
@@ -306,8 +310,8 @@ std::string describe(const Study& study);
 // Stable content hash of everything that determines the settled soil (for deposit reuse): FNV-1a
 // 64 of the canonical JSON text (sorted keys, shortest round-trip numbers) of the bin, fill height,
 // particle sizes, the particle and bin materials, layers, the interactions among them, the contact
-// model, the deposition settings (seed, threshold, deposition backend) and the DEM time step
-// settings. Tools, the run's DEM backend (dem.backend), dem.seed and dem.threads do not enter: one
+// model (soil.contact.rolling_regularisation_fraction only when not at its default), the deposition
+// settings (seed, threshold, deposition backend) and the DEM time step settings. Tools, the run's DEM backend (dem.backend), dem.seed and dem.threads do not enter: one
 // soil serves every backend and core count. 16 lowercase hex digits. Throws std::invalid_argument
 // for kinds without soil.
 std::string soilHash(const Study& study);

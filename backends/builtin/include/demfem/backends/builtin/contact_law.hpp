@@ -221,22 +221,25 @@ template <study::NormalModel N>
 }
 
 // Spin below which the edem-standard torque M = -mu_r Fn d w_hat falls linearly to zero: the spin
-// that M removes in one step, times kRollingStopContacts. A constant torque that reverses a spin
-// within a step feeds energy in: the spin chatters at about M dt / I and a pack never comes to rest
-// (docs/builtin-dem.md, "Rolling friction at rest"). Below this scale the torque is
-// -I w / (kRollingStopContacts dt) per contact, so that a particle with that many contacts only
-// stops, never reverses, in one step. 0 when inv_inertia is 0 (the law as EDEM states it).
+// that M removes in one step `dt_r`, times kRollingStopContacts. A constant torque that reverses a
+// spin within a step feeds energy in: the spin chatters at about M dt / I and a pack never comes to
+// rest (docs/builtin-dem.md, "Rolling friction at rest"). Below this scale the torque is
+// -I w / (kRollingStopContacts dt_r) per contact, so that a particle with that many contacts only
+// stops, never reverses, in one step dt <= dt_r. dt_r is the longer of the DEM step and the
+// regularisation step (physics::rollingRegularisationStep): below that step the law is the same at
+// every step. 0 when inv_inertia is 0 (the law as EDEM states it).
 inline constexpr double kRollingStopContacts = 12;  // the densest coordination of equal spheres
-inline double rollingSpinScale(double torque, double inv_inertia, double dt) {
-  return kRollingStopContacts * torque * dt * inv_inertia;
+inline double rollingSpinScale(double torque, double inv_inertia, double dt_r) {
+  return kRollingStopContacts * torque * dt_r * inv_inertia;
 }
 
 // The complete contact: normal, cohesion, tangential (with or without history), rolling.
-// `hist` points to HistoryLayout::size doubles of this contact (may be null if size is 0).
+// `hist` points to HistoryLayout::size doubles of this contact (may be null if size is 0); `dt` is
+// the DEM step, `rolling_dt` (>= dt) the step of the rolling law's spin scale (rollingSpinScale).
 template <study::NormalModel N, study::RollingModel R>
 [[gnu::always_inline]] inline ContactResult contactForce(const study::ContactModel& model, const HistoryLayout& layout, const PairLaw& law,
-                                  const ContactStiffness& s, const ContactKinematics& k, double dt, double* hist,
-                                  bool wall) {
+                                  const ContactStiffness& s, const ContactKinematics& k, double dt, double rolling_dt,
+                                  double* hist, bool wall) {
   using detail::cross3;
   using detail::dot3;
   ContactResult out{};
@@ -281,8 +284,8 @@ template <study::NormalModel N, study::RollingModel R>
   // Rolling resistance.
   if constexpr (R == study::RollingModel::EdemStandard) {
     const double f = law.rolling_friction * std::max(0.0, fn_contact);
-    const double wim = std::max(std::sqrt(dot3(k.wi, k.wi)), rollingSpinScale(f * k.di, k.inv_ii, dt));
-    const double wjm = std::max(std::sqrt(dot3(k.wj, k.wj)), rollingSpinScale(f * k.dj, k.inv_ij, dt));
+    const double wim = std::max(std::sqrt(dot3(k.wi, k.wi)), rollingSpinScale(f * k.di, k.inv_ii, rolling_dt));
+    const double wjm = std::max(std::sqrt(dot3(k.wj, k.wj)), rollingSpinScale(f * k.dj, k.inv_ij, rolling_dt));
     for (int c = 0; c < 3; ++c) {
       if (wim > 0) out.torque_i[c] -= f * k.di * k.wi[c] / wim;
       if (wjm > 0) out.torque_j[c] -= f * k.dj * k.wj[c] / wjm;

@@ -36,6 +36,7 @@
 #include "demfem/backends/builtin/triangle_mesh.hpp"
 #include "demfem/study/study.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
@@ -108,6 +109,11 @@ class DemSimulation {
   // Sets the step; throws std::invalid_argument if dt <= 0 or above the stability limit.
   void setTimeStep(double dt);
   double timeStep() const { return dt_; }
+  // The step whose spin scale the edem-standard rolling law keeps at every shorter DEM step
+  // (contact_law.hpp, rollingSpinScale; a study's is physics::rollingRegularisationStep). 0, the
+  // default: the scale follows the DEM step. Throws std::invalid_argument if negative.
+  void setRollingRegularisationStep(double step_s);
+  double rollingStep() const { return std::max(dt_, rolling_step_s_); }
   // 2 sqrt(m*/k_max) over the particles and walls in it: the largest step setTimeStep accepts (the
   // study's step is chosen by physics::demTimeStep, backends/physics/time_step.hpp).
   double stabilityLimit() const;
@@ -258,7 +264,7 @@ class DemSimulation {
   int threads_;
   Vec3 gravity_{0, -9.81, 0};
   double damping_per_s_ = 0;
-  double dt_ = 0, time_ = 0;
+  double dt_ = 0, time_ = 0, rolling_step_s_ = 0;
   long step_ = 0;
   double skin_ = 0;
   bool lists_valid_ = false;

@@ -20,12 +20,18 @@
 //   else dem.dt_fraction of the critical step of dem.criterion. `critical` is that criterion's
 //   critical step, or the stiffest spring's for an explicit dem.dt_s (the step's stability margin);
 //   `why` says which contact limits it, with its stiffness and mass, in one line.
+// - rollingRegularisationStep(study): the step whose spin scale the edem-standard rolling law keeps
+//   at every shorter DEM step (builtin/contact_law.hpp, rollingSpinScale):
+//   soil.contact.rolling_regularisation_fraction of the stiffest spring's critical step, shortened
+//   to divide the FEM step as the DEM step is, so that at a dem.dt_fraction equal to it (criterion
+//   stiffest-spring) the two are the same number.
 // - Throws std::invalid_argument for a study without layers, a dt_fraction outside (0, 1] or a
 //   non-positive dt_s, and std::out_of_range (study::Study::interaction) for a missing pair.
 #pragma once
 
 #include "demfem/backends/physics/dem_formulas.hpp"
 #include "demfem/study/study.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <cstdio>
 #include <limits>
@@ -151,6 +157,14 @@ inline DemStep demTimeStep(const study::Study& s) {
   out.step_s = s.dem.dt_fraction * out.critical_s;
   out.why = "dem.dt_fraction " + detail::formatSeconds(s.dem.dt_fraction) + " of the " + limit;
   return out;
+}
+
+inline double rollingRegularisationStep(const study::Study& s) {
+  const double fraction = s.soil.contact.rolling_regularisation_fraction;
+  if (!(fraction > 0 && fraction <= 1))
+    throw std::invalid_argument("DEM time step: /soil/contact/rolling_regularisation_fraction must be in (0, 1], got " +
+                                detail::formatSeconds(fraction));
+  return study::demStepDividing(fraction * criticalStep(s, study::TimeStepCriterion::StiffestSpring).step_s, s.fem.dt_s);
 }
 
 }  // namespace demfem::physics
