@@ -4,6 +4,7 @@
 #include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/backend_registry.hpp"
 #include "demfem/fem/model.hpp"
+#include "demfem/study/contact_laws.hpp"
 #include "demfem/study/tool_motion.hpp"
 
 #include <algorithm>
@@ -53,6 +54,7 @@ RunCost estimateRunCost(const study::Study& s) {
     cost.dem_step_s = study::demStepDividing(step.step_s, s.fem.dt_s);  // the step both backends run (one clock)
     cost.dem_critical_step_s = step.critical_s;
     cost.dem_step_why = step.why;
+    if (study::rollingUsesSpinScale(s.soil.contact.rolling)) cost.rolling_regularisation_step_s = physics::rollingRegularisationStep(s);
     cost.dem_steps = wholeSteps(cost.simulated_s, *cost.dem_step_s);
     cost.particles = builtin::estimatedParticleCount(s.soil);
     if (backend.speed)

@@ -31,6 +31,9 @@ struct RunCost {
   std::optional<double> dem_step_s;  // absent without soil (weight drop)
   double dem_critical_step_s = 0;    // physics::DemStep::critical_s
   std::string dem_step_why;          // physics::DemStep::why
+  // physics::rollingRegularisationStep, on the edem-standard rolling law only: at a DEM step not
+  // above it the law is the same at every step.
+  std::optional<double> rolling_regularisation_step_s;
   std::int64_t fem_steps = 0;
   std::int64_t dem_steps = 0;
   double simulated_s = 0;

@@ -24,6 +24,13 @@ std::string describeCost(const RunCost& c) {
   if (c.dem_step_s) {
     std::snprintf(text, sizeof text, "dem_step = %.4g s (critical step %.4g s: ", *c.dem_step_s, c.dem_critical_step_s);
     out += text + c.dem_step_why + ")\n";
+    if (c.rolling_regularisation_step_s) {
+      std::snprintf(text, sizeof text, "rolling_regularisation_step = %.4g s (the edem-standard rolling law's spin scale: %s)\n",
+                    *c.rolling_regularisation_step_s,
+                    *c.dem_step_s <= *c.rolling_regularisation_step_s ? "the DEM step is not above it, so the law is that of every shorter step"
+                                                                       : "the DEM step is above it, so the law changes with the DEM step");
+      out += text;
+    }
     std::snprintf(text, sizeof text, "dem_steps = %lld\nparticles = %zu (at most: the packing the deposition inserts)\n",
                   static_cast<long long>(c.dem_steps), c.particles);
     out += text;
@@ -37,6 +44,8 @@ nlohmann::json costJson(const RunCost& c) {
   return {{"dem_step_s", c.dem_step_s ? nlohmann::json(*c.dem_step_s) : nlohmann::json(nullptr)},
           {"dem_critical_step_s", c.dem_step_s ? nlohmann::json(c.dem_critical_step_s) : nlohmann::json(nullptr)},
           {"dem_step_reason", c.dem_step_s ? nlohmann::json(c.dem_step_why) : nlohmann::json(nullptr)},
+          {"rolling_regularisation_step_s",
+           c.rolling_regularisation_step_s ? nlohmann::json(*c.rolling_regularisation_step_s) : nlohmann::json(nullptr)},
           {"dem_steps", c.dem_steps},
           {"fem_steps", c.fem_steps},
           {"simulated_s", c.simulated_s},
