@@ -10,13 +10,23 @@
 //   R_i), centre-to-contact distances (pair: R - delta/2 each; wall: r and 0), normal relative
 //   velocity vn = (v_i - v_j) . n and the tangential velocity of the contact point including the
 //   spins, vt = v_r - vn n - (d_i w_i + d_j w_j) x n.
-// - withModel calls f.template operator()<N, R>() once, with the study's normal and rolling models.
+// - withModel calls f.template operator()<N, R, Shear>() once, with the study's normal and rolling
+//   models and whether it keeps a tangential history.
 #pragma once
 
 #include "demfem/backends/builtin/contact_law.hpp"
 #include "demfem/study/study.hpp"
 
 namespace demfem::builtin {
+
+// Overlap and R* of a particle pair at centre distance r (radii ri, rj).
+struct PairOverlap {
+  double delta, reff;
+};
+[[gnu::always_inline]] inline PairOverlap pairOverlap(double r, double ri, double rj) {
+  const double rs = ri + rj;
+  return {rs - r, ri * rj / rs};
+}
 
 template <bool Wall>
 [[gnu::always_inline]] inline ContactKinematics contactKinematics(const double* n, double r, double ri, double rj,
@@ -33,10 +43,10 @@ template <bool Wall>
     k.di = r;
     k.dj = 0;
   } else {
-    const double rs = ri + rj;
-    k.delta = rs - r;
+    const PairOverlap o = pairOverlap(r, ri, rj);
+    k.delta = o.delta;
     k.rj = rj;
-    k.reff = ri * rj / rs;
+    k.reff = o.reff;
     k.di = ri - 0.5 * k.delta;
     k.dj = rj - 0.5 * k.delta;
   }
@@ -65,12 +75,16 @@ template <class F>
 void withModel(const study::ContactModel& model, F&& f) {
   using NM = study::NormalModel;
   using RM = study::RollingModel;
+  const auto shear = [&]<NM N, RM R>() {
+    if (model.tangential_history) f.template operator()<N, R, true>();
+    else f.template operator()<N, R, false>();
+  };
   const auto rolling = [&]<NM N>() {
     switch (model.rolling) {
-      case RM::None: f.template operator()<N, RM::None>(); break;
-      case RM::EdemStandard: f.template operator()<N, RM::EdemStandard>(); break;
-      case RM::Cdt: f.template operator()<N, RM::Cdt>(); break;
-      case RM::Epsd: f.template operator()<N, RM::Epsd>(); break;
+      case RM::None: shear.template operator()<N, RM::None>(); break;
+      case RM::EdemStandard: shear.template operator()<N, RM::EdemStandard>(); break;
+      case RM::Cdt: shear.template operator()<N, RM::Cdt>(); break;
+      case RM::Epsd: shear.template operator()<N, RM::Epsd>(); break;
     }
   };
   switch (model.normal) {

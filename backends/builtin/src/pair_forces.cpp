@@ -1,9 +1,10 @@
 // Particle-particle contact forces of the built-in DEM over the half neighbour list
 // (docs/builtin-dem.md, "Performance design"). Rows are taken in batches: a first pass finds the
-// touching slots of the batch and their squared distances, a second computes every touching
-// contact's distance and its inverse at once (independent square roots and divisions, vectorised:
-// AVX2 where the CPU has it), and the contact law then runs on each contact without waiting for
-// them. The results are those of one contact after the other, bit for bit.
+// touching slots of the batch, then loops over the batch's contacts compute their distances, their
+// cohesive forces and the contact law, each loop vectorised across contacts (compiled for AVX-512,
+// AVX2 and the baseline, the widest the CPU has chosen at run time), and a last pass adds the forces to
+// the particles and stores the histories. The results are those of one contact after the other,
+// bit for bit: the same operations in the same order on each contact, no fused multiply-add.
 #include "demfem/backends/builtin/simulation.hpp"
 
 #include "contact_kinematics.hpp"
@@ -20,30 +21,169 @@ namespace {
 
 constexpr std::size_t kBatchContacts = 256;  // touching contacts per batch (rows are not split)
 
-// r = sqrt(r2), rinv = 1 / r for count contacts; the spin norm |w| = sqrt(w2) when w2 is given.
-[[gnu::target_clones("avx2", "default")]] void distances(const double* r2, const double* w2, std::size_t count,
-                                                         double* r, double* rinv, double* wnorm) {
+// A loop whose iterations are independent (no store reaches another iteration's loads). GCC is
+// told so; clang's vectoriser, told the same, still refuses these loops and warns each time, so it
+// is left to its own analysis (only the sanitizer build uses clang).
+#if defined(__clang__)
+#define DEMFEM_INDEPENDENT_ITERATIONS
+#else
+#define DEMFEM_INDEPENDENT_ITERATIONS _Pragma("GCC ivdep")
+#endif
+#define DEMFEM_INLINE __attribute__((always_inline))
+
+// runVectorised(f) runs f() compiled for the widest vector instruction set of the CPU: f is an
+// always-inline lambda, so its loops are compiled anew inside each runner. (Function clones of the
+// batch loops would do the same, but clang does not clone templates.)
+enum class VectorIsa { Avx512, Avx2, Baseline };
+
+VectorIsa hostVectorIsa() {
+#if defined(__x86_64__)
+  static const VectorIsa isa = __builtin_cpu_supports("avx512f") ? VectorIsa::Avx512
+                               : __builtin_cpu_supports("avx2")  ? VectorIsa::Avx2
+                                                                 : VectorIsa::Baseline;
+  return isa;
+#else
+  return VectorIsa::Baseline;
+#endif
+}
+
+#if defined(__x86_64__)
+template <class F>
+[[gnu::target("avx512f")]] void runAvx512(const F& f) {
+  f();
+}
+template <class F>
+[[gnu::target("avx2")]] void runAvx2(const F& f) {
+  f();
+}
+#endif
+
+template <class F>
+void runVectorised(const F& f) {
+  switch (hostVectorIsa()) {
+#if defined(__x86_64__)
+    case VectorIsa::Avx512: runAvx512(f); return;
+    case VectorIsa::Avx2: runAvx2(f); return;
+#else
+    case VectorIsa::Avx512:
+    case VectorIsa::Avx2:
+#endif
+    case VectorIsa::Baseline: f(); return;
+  }
+}
+
+// What the loops over a batch read: the simulation's particle arrays, the pair laws, the list
+// slots' stiffness and history, and the batch's contacts (slot, i, j, law index; distance, inverse).
+struct PairInputs {
+  const double *x, *v, *w, *radius, *inv_inertia;
+  const PairLaw* laws;
+  const ContactStiffness* stiffness;
+  const double* history;
+  const std::int32_t *slot, *i, *j, *law;
+  const double *r, *rinv, *cohesion;
+};
+
+// r = sqrt(r2), rinv = 1 / r for count contacts.
+[[gnu::always_inline]] inline void distances(const double* r2, std::size_t count, double* r, double* rinv) {
+  DEMFEM_INDEPENDENT_ITERATIONS
   for (std::size_t k = 0; k < count; ++k) {
     r[k] = std::sqrt(r2[k]);
     rinv[k] = 1.0 / r[k];
   }
-  if (w2)
-    for (std::size_t k = 0; k < count; ++k) wnorm[k] = std::sqrt(w2[k]);
+}
+
+// The cohesive normal force of count contacts (cohesionForce<C>).
+template <study::CohesionModel C>
+[[gnu::always_inline]] inline void pairCohesion(const PairInputs& in, std::size_t count, double* cohesion) {
+  const PairInputs p = in;  // the arrays in registers: the stores below do not reach them
+  DEMFEM_INDEPENDENT_ITERATIONS
+  for (std::size_t k = 0; k < count; ++k) {
+    const double ri = p.radius[p.i[k]], rj = p.radius[p.j[k]];
+    const PairOverlap o = pairOverlap(p.r[k], ri, rj);
+    cohesion[k] = cohesionForce<C>(p.laws[p.law[k]].cohesion_J_m3, o.reff, o.delta, ri, p.r[k], rj, false);
+  }
+}
+
+// The law of count contacts into the batch's result arrays.
+template <study::NormalModel N, study::RollingModel R, bool Shear>
+[[gnu::always_inline]] inline void pairLaws(const study::ContactModel& model, const PairInputs& inputs, std::size_t count,
+                                            double dt, double rolling_dt, PairBatch& out) {
+  constexpr HistoryLayout L = HistoryLayout::of(N, R, Shear);
+  const PairInputs in = inputs;  // the arrays in registers: the stores below do not reach them
+  const study::ContactModel m = model;
+  double *f0 = out.f[0].data(), *f1 = out.f[1].data(), *f2 = out.f[2].data();
+  double *ti0 = out.ti[0].data(), *ti1 = out.ti[1].data(), *ti2 = out.ti[2].data();
+  double *tj0 = out.tj[0].data(), *tj1 = out.tj[1].data(), *tj2 = out.tj[2].data();
+  double* delta = out.delta.data();
+  double* const h0 = out.hist[0].data();
+  double* const h1 = out.hist[1].data();
+  double* const h2 = out.hist[2].data();
+  double* const h3 = out.hist[3].data();
+  double* const h4 = out.hist[4].data();
+  double* const h5 = out.hist[5].data();
+  double* const h6 = out.hist[6].data();
+  DEMFEM_INDEPENDENT_ITERATIONS
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t i = static_cast<std::size_t>(in.i[k]), j = static_cast<std::size_t>(in.j[k]);
+    const std::size_t s = static_cast<std::size_t>(in.slot[k]);
+    const double rinv = in.rinv[k];
+    const double* x = in.x;
+    const double normal[3] = {(x[3 * i] - x[3 * j]) * rinv, (x[3 * i + 1] - x[3 * j + 1]) * rinv,
+                              (x[3 * i + 2] - x[3 * j + 2]) * rinv};
+    ContactKinematics kin = contactKinematics<false>(normal, in.r[k], in.radius[i], in.radius[j], &in.v[3 * i], &in.w[3 * i],
+                                                     &in.v[3 * j], &in.w[3 * j]);
+    kin.wrel_norm = std::sqrt(norm2(kin.wrel));
+    kin.inv_ii = in.inv_inertia[i];
+    kin.inv_ij = in.inv_inertia[j];
+    ContactHistory h = loadHistory(L, in.history + s * L.size);
+    const ContactResult res =
+        contactForce<N, R, Shear>(m, in.laws[in.law[k]], in.stiffness[s], kin, dt, rolling_dt, in.cohesion[k], h, false);
+    f0[k] = res.force[0];
+    f1[k] = res.force[1];
+    f2[k] = res.force[2];
+    ti0[k] = res.torque_i[0];
+    ti1[k] = res.torque_i[1];
+    ti2[k] = res.torque_i[2];
+    tj0[k] = res.torque_j[0];
+    tj1[k] = res.torque_j[1];
+    tj2[k] = res.torque_j[2];
+    delta[k] = kin.delta;
+    if constexpr (L.shear >= 0) {
+      h0[k] = h.shear[0];
+      h1[k] = h.shear[1];
+      h2[k] = h.shear[2];
+    }
+    if constexpr (L.delta_max >= 0) (L.delta_max == 0 ? h0 : h3)[k] = h.delta_max;
+    if constexpr (L.roll >= 0) {
+      (L.roll == 1 ? h1 : h4)[k] = h.roll[0];
+      (L.roll == 1 ? h2 : h5)[k] = h.roll[1];
+      (L.roll == 1 ? h3 : h6)[k] = h.roll[2];
+    }
+  }
 }
 
 }  // namespace
 
-void DemSimulation::pairForces(int part) {
-  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { pairLoop<N, R>(part); });
+void PairBatch::growTo(std::size_t slots) {
+  if (slot.size() >= slots) return;
+  for (auto* a : {&slot, &i, &j, &law}) a->resize(slots);
+  for (auto* a : {&r2, &r, &rinv, &cohesion, &delta}) a->resize(slots);
+  for (auto* a : {f, ti, tj})
+    for (int c = 0; c < 3; ++c) a[c].resize(slots);
+  for (auto& h : hist) h.resize(slots);
 }
 
-template <study::NormalModel N, study::RollingModel R>
+void DemSimulation::pairForces(int part) {
+  withModel(model_, [&]<study::NormalModel N, study::RollingModel R, bool Shear>() { pairLoop<N, R, Shear>(part); });
+}
+
+template <study::NormalModel N, study::RollingModel R, bool Shear>
 void DemSimulation::pairLoop(int part) {
   const std::size_t n = particleCount();
-  const int H = layout_.size;
-  const double dt = dt_, rolling_dt = rollingStep();
-  constexpr bool kRollingNorm = R == study::RollingModel::Cdt;  // the law needs |w_i - w_j|
+  constexpr int H = HistoryLayout::of(N, R, Shear).size;
+  DEMFEM_ASSERT(H == layout_.size);
   PartState& ts = part_[part];
+  PairBatch& b = ts.batch;
   // Part `part` owns rows [lo, hi); it writes particles [lo, window_end) only (half list: j > i),
   // so its buffer is cleared and summed over that window alone.
   const std::size_t lo = rangeBegin(part), hi = rangeEnd(part), window_end = part_window_end_[part];
@@ -58,74 +198,66 @@ void DemSimulation::pairLoop(int part) {
     F = ts.f.data();
     Tq = ts.t.data();
   }
+  const auto M = static_cast<std::int32_t>(table_.materials.size());
   double local_max = 0;
   std::int64_t bad = -1;
   for (std::size_t i0 = lo; i0 < hi;) {
-    // Pass 1: rows [i0, i1) until the batch holds kBatchContacts slots; touching slots and their
-    // squared distances (a slot that stopped touching loses its history).
-    ts.batch_slot.clear();
-    ts.batch_r2.clear();
-    ts.batch_w2.clear();
+    // Rows [i0, i1) until the batch holds kBatchContacts slots.
     std::size_t i1 = i0;
-    for (; i1 < hi && static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]) < kBatchContacts; ++i1) {
-      const double xi = x_[3 * i1], yi = x_[3 * i1 + 1], zi = x_[3 * i1 + 2];
-      const double ri = radius_[i1];
-      for (std::int32_t s = nb_start_[i1]; s < nb_start_[i1 + 1]; ++s) {
-        const std::size_t j = static_cast<std::size_t>(nb_j_[s]);
-        DEMFEM_ASSERT(j > i1 && j < window_end);
-        const double d[3] = {xi - x_[3 * j], yi - x_[3 * j + 1], zi - x_[3 * j + 2]};
-        const double rs = ri + radius_[j];
-        const double r2 = norm2(d);
-        if (r2 >= rs * rs) {
-          if (nb_touch_[s]) {
-            nb_touch_[s] = 0;
-            std::fill_n(nb_hist_.data() + static_cast<std::size_t>(s) * H, H, 0.0);
-          }
-          continue;
-        }
-        if (!nb_touch_[s]) nb_touch_[s] = 1;
-        ts.batch_slot.push_back(s);
-        ts.batch_r2.push_back(r2);
-        if constexpr (kRollingNorm) {
-          const double wr[3] = {w_[3 * i1] - w_[3 * j], w_[3 * i1 + 1] - w_[3 * j + 1], w_[3 * i1 + 2] - w_[3 * j + 2]};
-          ts.batch_w2.push_back(norm2(wr));
-        }
-      }
-    }
-    // Pass 2: the distances of all touching contacts of the batch.
-    const std::size_t count = ts.batch_slot.size();
-    ts.batch_r.resize(count);
-    ts.batch_rinv.resize(count);
-    ts.batch_wnorm.resize(count);
-    distances(ts.batch_r2.data(), kRollingNorm ? ts.batch_w2.data() : nullptr, count, ts.batch_r.data(),
-              ts.batch_rinv.data(), ts.batch_wnorm.data());
-    // Pass 3: the law, row by row; i's sums stay in registers over its row.
-    std::size_t k = 0;
+    while (i1 < hi && static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]) < kBatchContacts) ++i1;
+    b.growTo(static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]));
+    // Their touching slots, written at the next free place whether touching or not and kept by
+    // advancing the count (no branch on the contact); a slot that stopped touching loses its history.
+    std::size_t count = 0;
     for (std::size_t i = i0; i < i1; ++i) {
       const double xi = x_[3 * i], yi = x_[3 * i + 1], zi = x_[3 * i + 2];
       const double ri = radius_[i];
-      const PairLaw* laws_i = &table_.law(material_[i], 0);  // row of i's material
+      const std::int32_t law_row = material_[i] * M;
+      for (std::int32_t s = nb_start_[i]; s < nb_start_[i + 1]; ++s) {
+        const std::int32_t j = nb_j_[s];
+        DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < window_end);
+        const double* xj = &x_[3 * static_cast<std::size_t>(j)];
+        const double d[3] = {xi - xj[0], yi - xj[1], zi - xj[2]};
+        const double rs = ri + radius_[j];
+        const double r2 = norm2(d);
+        const std::uint8_t touching = r2 < rs * rs;
+        if (touching != nb_touch_[s]) [[unlikely]] {
+          nb_touch_[s] = touching;
+          if (!touching) std::fill_n(nb_hist_.data() + static_cast<std::size_t>(s) * H, H, 0.0);
+        }
+        b.slot[count] = s;
+        b.i[count] = static_cast<std::int32_t>(i);
+        b.j[count] = j;
+        b.law[count] = law_row + material_[j];
+        b.r2[count] = r2;
+        count += touching;
+      }
+    }
+    runVectorised([&]() DEMFEM_INLINE { distances(b.r2.data(), count, b.r.data(), b.rinv.data()); });
+    const PairInputs in{x_.data(),     v_.data(),     w_.data(),     radius_.data(), inv_inertia_.data(),
+                        table_.laws.data(), nb_stiff_.data(), nb_hist_.data(), b.slot.data(), b.i.data(),
+                        b.j.data(),    b.law.data(),  b.r.data(),    b.rinv.data(),  b.cohesion.data()};
+    withCohesion(model_.cohesion, [&]<study::CohesionModel C>() {
+      runVectorised([&]() DEMFEM_INLINE { pairCohesion<C>(in, count, b.cohesion.data()); });
+    });
+    const double rolling_dt = rollingStep();
+    runVectorised([&]() DEMFEM_INLINE { pairLaws<N, R, Shear>(model_, in, count, dt_, rolling_dt, b); });
+    // The forces to the particles in slot order (i's sums stay in registers over its row), the
+    // histories back to their slots.
+    std::size_t k = 0;
+    for (std::size_t i = i0; i < i1; ++i) {
       double fi[3] = {0, 0, 0}, ti[3] = {0, 0, 0};
-      for (; k < count && ts.batch_slot[k] < nb_start_[i + 1]; ++k) {
-        const std::int32_t s = ts.batch_slot[k];
-        const std::size_t j = static_cast<std::size_t>(nb_j_[s]);
-        const double rj = radius_[j];
-        const double rinv = ts.batch_rinv[k];
-        const double normal[3] = {(xi - x_[3 * j]) * rinv, (yi - x_[3 * j + 1]) * rinv, (zi - x_[3 * j + 2]) * rinv};
-        ContactKinematics kin =
-            contactKinematics<false>(normal, ts.batch_r[k], ri, rj, &v_[3 * i], &w_[3 * i], &v_[3 * j], &w_[3 * j]);
-        kin.wrel_norm = ts.batch_wnorm[k];
-        kin.inv_ii = inv_inertia_[i];
-        kin.inv_ij = inv_inertia_[j];
-        if (kin.delta > local_max) local_max = kin.delta;
-        if (kin.delta > overlapLimitFraction() * std::min(ri, rj) && bad < 0) bad = static_cast<std::int64_t>(i);
-        const ContactResult res = contactForce<N, R>(model_, layout_, laws_i[material_[j]], nb_stiff_[s], kin, dt, rolling_dt,
-                                                     nb_hist_.data() + static_cast<std::size_t>(s) * H, false);
+      for (; k < count && b.slot[k] < nb_start_[i + 1]; ++k) {
+        const std::size_t j = static_cast<std::size_t>(b.j[k]);
+        if (b.delta[k] > local_max) local_max = b.delta[k];
+        if (b.delta[k] > overlapLimitFraction() * std::min(radius_[i], radius_[j]) && bad < 0) bad = static_cast<std::int64_t>(i);
+        double* hist = nb_hist_.data() + static_cast<std::size_t>(b.slot[k]) * H;
+        for (int c = 0; c < H; ++c) hist[c] = b.hist[c][k];
         for (int c = 0; c < 3; ++c) {
-          fi[c] += res.force[c];
-          F[3 * j + c] -= res.force[c];
-          ti[c] += res.torque_i[c];
-          Tq[3 * j + c] += res.torque_j[c];
+          fi[c] += b.f[c][k];
+          F[3 * j + c] -= b.f[c][k];
+          ti[c] += b.ti[c][k];
+          Tq[3 * j + c] += b.tj[c][k];
         }
       }
       for (int c = 0; c < 3; ++c) {

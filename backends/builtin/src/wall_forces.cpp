@@ -193,12 +193,12 @@ Vec3 DemSimulation::wallVelocity(const WallTouch& t) const {
 }
 
 void DemSimulation::wallForces(int part) {
-  withModel(model_, [&]<study::NormalModel N, study::RollingModel R>() { wallLoop<N, R>(part); });
+  withModel(model_, [&]<study::NormalModel N, study::RollingModel R, bool Shear>() { wallLoop<N, R, Shear>(part); });
 }
 
 // The wall contacts of this part's particles, in particle order, into its own list; the forces
 // go to the particles at once, the reactions to the walls after the gathering (serial).
-template <study::NormalModel N, study::RollingModel R>
+template <study::NormalModel N, study::RollingModel R, bool Shear>
 void DemSimulation::wallLoop(int part) {
   PartState& ts = part_[part];
   auto& out = ts.wall;
@@ -227,8 +227,11 @@ void DemSimulation::wallLoop(int part) {
         bad = static_cast<std::int64_t>(i);
         ts.wall_bad_wall = touch[a].wall;
       }
-      const ContactResult res = contactForce<N, R>(model_, layout_, table_.law(material_[i], wallMaterial(touch[a].wall)),
-                                                   wc.stiffness, k, dt_, rollingStep(), layout_.size ? wc.hist : nullptr, true);
+      const PairLaw& law = table_.law(material_[i], wallMaterial(touch[a].wall));
+      ContactHistory hist = loadHistory(layout_, wc.hist);
+      const ContactResult res = contactForce<N, R, Shear>(model_, law, wc.stiffness, k, dt_, rollingStep(),
+                                                          cohesionForce(model_.cohesion, law, k, true), hist, true);
+      storeHistory(layout_, hist, wc.hist);
       for (int c = 0; c < 3; ++c) {
         f_[3 * i + c] += res.force[c];
         t_[3 * i + c] += res.torque_i[c];

@@ -82,7 +82,7 @@ TEST_CASE("hysteretic spring follows the loading line K1 and the unloading line 
   double dmax = 0;
   const auto force = [&](double delta) {
     k.delta = delta;
-    return normalForce<study::NormalModel::EdemHysteretic>(model, law, s, k, &dmax);
+    return normalForce<study::NormalModel::EdemHysteretic>(model, law, s, k, dmax);
   };
   // Loading: F = K1 delta (exact arithmetic on these numbers up to round-off).
   CHECK(force(0.5e-3) == Approx(0.5).epsilon(1e-12));
@@ -279,7 +279,6 @@ TEST_CASE("cohesive pair needs k_coh pi R* delta0 to separate after loading to d
   // EDEM hysteretic + linear cohesion: on unloading Fn = K2 (delta - delta0) - k pi R* delta, so the
   // largest tension along the separation path is at delta0 = delta_max (1 - e^2): k pi R* delta0.
   study::ContactModel model;
-  const HistoryLayout layout = HistoryLayout::of(model);
   PairLaw law;
   law.restitution = 0.5;
   law.cohesion_J_m3 = 2e5;
@@ -287,7 +286,7 @@ TEST_CASE("cohesive pair needs k_coh pi R* delta0 to separate after loading to d
   law.friction = 0.5;
   const double reff = kR / 2, meff = sphereMass(2000, kR) / 2;
   const ContactStiffness s = contactStiffness(model, law, reff, meff);
-  std::vector<double> hist(layout.size, 0.0);
+  ContactHistory hist;
   ContactKinematics k{};
   k.n[0] = 1;
   k.reff = reff;
@@ -298,8 +297,8 @@ TEST_CASE("cohesive pair needs k_coh pi R* delta0 to separate after loading to d
   for (int step = 1; step < 4000; ++step) {  // load 0 -> delta_max, then unload to 0
     k.delta = step <= 2000 ? delta_max * step / 2000 : delta_max * (4000 - step) / 2000;
     k.r = 2 * kR - k.delta;
-    const auto res = contactForce<study::NormalModel::EdemHysteretic, study::RollingModel::None>(model, layout, law, s, k,
-                                                                                                 1e-6, 1e-6, hist.data(), false);
+    const auto res = contactForce<study::NormalModel::EdemHysteretic, study::RollingModel::None, true>(
+        model, law, s, k, 1e-6, 1e-6, cohesionForce(model.cohesion, law, k, false), hist, false);
     max_tension = std::max(max_tension, -res.normal_force);
   }
   const double delta0 = delta_max * (1 - law.restitution * law.restitution);

@@ -110,20 +110,48 @@ inline double stiffestSpring(const study::ContactModel& model, const PairLaw& la
   return s.kn;
 }
 
-// History slots of one contact; offsets are -1 when the model does not use them.
+// History slots of one contact as stored (HistoryLayout::size doubles per contact); offsets are -1
+// when the model does not use them.
 struct HistoryLayout {
   int size = 0;
   int shear = -1;      // 3 doubles
   int delta_max = -1;  // 1 double
   int roll = -1;       // 3 doubles
-  static HistoryLayout of(const study::ContactModel& m) {
+  static constexpr int kMaxSize = 7;
+  static constexpr HistoryLayout of(study::NormalModel normal, study::RollingModel rolling, bool tangential_history) {
     HistoryLayout h;
-    if (m.tangential_history) { h.shear = h.size; h.size += 3; }
-    if (m.normal != study::NormalModel::Hooke) { h.delta_max = h.size; h.size += 1; }
-    if (m.rolling == study::RollingModel::Epsd) { h.roll = h.size; h.size += 3; }
+    if (tangential_history) { h.shear = h.size; h.size += 3; }
+    if (normal != study::NormalModel::Hooke) { h.delta_max = h.size; h.size += 1; }
+    if (rolling == study::RollingModel::Epsd) { h.roll = h.size; h.size += 3; }
     return h;
   }
+  static HistoryLayout of(const study::ContactModel& m) { return of(m.normal, m.rolling, m.tangential_history); }
 };
+
+// The history of one contact as the law reads and updates it (the fields its layout lacks stay 0).
+struct ContactHistory {
+  double shear[3] = {0, 0, 0};
+  double delta_max = 0;
+  double roll[3] = {0, 0, 0};
+};
+
+[[gnu::always_inline]] inline ContactHistory loadHistory(const HistoryLayout& h, const double* stored) {
+  ContactHistory out;
+  if (h.shear >= 0)
+    for (int c = 0; c < 3; ++c) out.shear[c] = stored[h.shear + c];
+  if (h.delta_max >= 0) out.delta_max = stored[h.delta_max];
+  if (h.roll >= 0)
+    for (int c = 0; c < 3; ++c) out.roll[c] = stored[h.roll + c];
+  return out;
+}
+
+[[gnu::always_inline]] inline void storeHistory(const HistoryLayout& h, const ContactHistory& in, double* stored) {
+  if (h.shear >= 0)
+    for (int c = 0; c < 3; ++c) stored[h.shear + c] = in.shear[c];
+  if (h.delta_max >= 0) stored[h.delta_max] = in.delta_max;
+  if (h.roll >= 0)
+    for (int c = 0; c < 3; ++c) stored[h.roll + c] = in.roll[c];
+}
 
 // Geometry and kinematics of one contact, filled by the caller.
 struct ContactKinematics {
@@ -159,65 +187,84 @@ inline void cross3(const double* a, const double* b, double* c) {
 }
 }  // namespace detail
 
+// The branches of the laws below are written as selects, so that a loop over a batch of contacts
+// vectorises (builtin/src/pair_forces.cpp); each value is that of the branch taken, bit for bit.
+
 // Normal force (elastic/plastic + viscous, no cohesion) of normal model N; updates delta_max.
 template <study::NormalModel N>
 [[gnu::always_inline]] inline double normalForce(const study::ContactModel& model, const PairLaw& law, const ContactStiffness& s,
-                          const ContactKinematics& k, double* delta_max) {
+                                                 const ContactKinematics& k, double& delta_max) {
   const double delta = k.delta;
   if constexpr (N == study::NormalModel::Hooke) {
     return s.kn * delta - s.gamma_n * k.vn;
   } else if constexpr (N == study::NormalModel::EdemHysteretic) {
     // Walton-Braun: loading K1, unloading/reloading K2 = K1/e^2 from delta0 = delta_max (1 - e^2).
-    if (delta > *delta_max) *delta_max = delta;
+    delta_max = std::max(delta_max, delta);
     const double e = law.restitution;
     const double loading = s.kn * delta;
-    const double unloading = s.kn / (e * e) * (delta - *delta_max * (1.0 - e * e));
-    if (loading <= unloading) return std::max(0.0, loading - s.gamma_n * k.vn);
-    if (unloading <= 0) return 0.0;                                    // plastic gap
-    return std::max(0.0, unloading - s.gamma_n / e * k.vn);            // sqrt(K2/K1) = 1/e
+    const double unloading = s.kn / (e * e) * (delta - delta_max * (1.0 - e * e));
+    const double on_loading = std::max(0.0, loading - s.gamma_n * k.vn);
+    const double on_unloading = std::max(0.0, unloading - s.gamma_n / e * k.vn);  // sqrt(K2/K1) = 1/e
+    const double unloading_or_gap = unloading <= 0 ? 0.0 : on_unloading;  // 0: the plastic gap
+    return loading <= unloading ? on_loading : unloading_or_gap;
   } else {
     // LIGGGHTS hooke/hysteresis (Luding's elasto-plastic adhesive spring).
     const double kn = s.kn;
     const double k2max = kn * model.coefficient_max_elastic_stiffness;
     const double kc = kn * model.coefficient_adhesion_stiffness;
-    if (delta > *delta_max) *delta_max = delta;
+    const double dmax = std::max(delta_max, delta);
     const double lim = k2max / (k2max - kn) * model.coefficient_plasticity_depth * 2.0 * k.reff;
-    const auto adhesive = [&] {
-      *delta_max = 0.5 * (delta + std::sqrt(delta * delta + 4.0 * ((kn + kc) * delta * lim / (k2max - kn))));
-      return -kc * delta;
-    };
-    double f;
-    if (*delta_max >= lim) {
-      const double trial = k2max * (delta - lim) + kn * lim;
-      f = trial >= -kc * delta ? trial : adhesive();
-    } else {
-      const double k2 = kn + (k2max - kn) * *delta_max / lim;
-      const double trial = k2 * (delta - *delta_max) + kn * *delta_max;
-      if (trial >= kn * delta) f = kn * delta;
-      else f = trial > -kc * delta ? trial : adhesive();
-    }
+    const double beyond_trial = k2max * (delta - lim) + kn * lim;  // delta_max past the limit
+    const double k2 = kn + (k2max - kn) * dmax / lim;
+    const double trial = k2 * (delta - dmax) + kn * dmax;
+    const bool beyond = dmax >= lim;
+    const bool loading = !beyond && trial >= kn * delta;
+    const bool adhesive = beyond ? !(beyond_trial >= -kc * delta) : !loading && !(trial > -kc * delta);
+    // On the adhesive branch delta_max moves as LIGGGHTS moves it.
+    const double adhesive_dmax = 0.5 * (delta + std::sqrt(delta * delta + 4.0 * ((kn + kc) * delta * lim / (k2max - kn))));
+    const double f = adhesive ? -kc * delta : beyond ? beyond_trial : loading ? kn * delta : trial;
+    delta_max = adhesive ? adhesive_dmax : dmax;
     return f - s.gamma_n * k.vn;
   }
 }
 
-// Cohesive normal force (<= 0) of the selected cohesion model.
-[[gnu::always_inline]] inline double cohesionForce(study::CohesionModel model, const PairLaw& law, const ContactKinematics& k, bool wall) {
+// Cohesive normal force (<= 0) of cohesion model C, from the contact's geometry: cohesion energy
+// density (J/m3), R*, overlap, radius of i, centre distance (pair) or centre-wall distance (wall),
+// radius of j (pair).
+template <study::CohesionModel C>
+[[gnu::always_inline]] inline double cohesionForce(double cohesion_J_m3, double reff, double delta, double ri, double r,
+                                                   double rj, bool wall) {
   constexpr double pi = std::numbers::pi;
   double area = 0;
-  switch (model) {
-    case study::CohesionModel::None: return 0;
-    case study::CohesionModel::EdemLinear: area = pi * k.reff * k.delta; break;
-    case study::CohesionModel::Sjkr:
-      if (wall) {
-        area = pi * (k.ri * k.ri - k.r * k.r);
-      } else {
-        const double r = k.r, a = k.ri, b = k.rj;
-        area = -pi / 4.0 * ((r - a - b) * (r + a - b) * (r - a + b) * (r + a + b)) / (r * r);
-      }
-      break;
-    case study::CohesionModel::Sjkr2: area = wall ? 2.0 * pi * k.ri * k.delta : 4.0 * pi * k.reff * k.delta; break;
+  if constexpr (C == study::CohesionModel::None) {
+    return 0;
+  } else if constexpr (C == study::CohesionModel::EdemLinear) {
+    area = pi * reff * delta;
+  } else if constexpr (C == study::CohesionModel::Sjkr) {
+    area = wall ? pi * (ri * ri - r * r)
+                : -pi / 4.0 * ((r - ri - rj) * (r + ri - rj) * (r - ri + rj) * (r + ri + rj)) / (r * r);
+  } else {
+    area = wall ? 2.0 * pi * ri * delta : 4.0 * pi * reff * delta;
   }
-  return -law.cohesion_J_m3 * area;
+  return -cohesion_J_m3 * area;
+}
+
+// withCohesion calls f.template operator()<C>() once, with the study's cohesion model.
+template <class F>
+void withCohesion(study::CohesionModel model, F&& f) {
+  using CM = study::CohesionModel;
+  switch (model) {
+    case CM::None: f.template operator()<CM::None>(); break;
+    case CM::EdemLinear: f.template operator()<CM::EdemLinear>(); break;
+    case CM::Sjkr: f.template operator()<CM::Sjkr>(); break;
+    case CM::Sjkr2: f.template operator()<CM::Sjkr2>(); break;
+  }
+}
+
+inline double cohesionForce(study::CohesionModel model, const PairLaw& law, const ContactKinematics& k, bool wall) {
+  double f = 0;
+  withCohesion(model, [&]<study::CohesionModel C>() { f = cohesionForce<C>(law.cohesion_J_m3, k.reff, k.delta, k.ri, k.r, k.rj, wall); });
+  return f;
 }
 
 // Spin below which the edem-standard torque M = -mu_r Fn d w_hat falls linearly to zero: the spin
@@ -233,40 +280,37 @@ inline double rollingSpinScale(double torque, double inv_inertia, double dt_r) {
   return kRollingStopContacts * torque * dt_r * inv_inertia;
 }
 
-// The complete contact: normal, cohesion, tangential (with or without history), rolling.
-// `hist` points to HistoryLayout::size doubles of this contact (may be null if size is 0); `dt` is
-// the DEM step, `rolling_dt` (>= dt) the step of the rolling law's spin scale (rollingSpinScale).
-template <study::NormalModel N, study::RollingModel R>
-[[gnu::always_inline]] inline ContactResult contactForce(const study::ContactModel& model, const HistoryLayout& layout, const PairLaw& law,
-                                  const ContactStiffness& s, const ContactKinematics& k, double dt, double rolling_dt,
-                                  double* hist, bool wall) {
+// The complete contact: normal, tangential (Shear: with the history spring) and rolling, plus the
+// cohesive normal force `cohesion` (<= 0, cohesionForce). `h` is the contact's history, updated;
+// `dt` is the DEM step, `rolling_dt` (>= dt) the step of the rolling law's spin scale
+// (rollingSpinScale).
+template <study::NormalModel N, study::RollingModel R, bool Shear>
+[[gnu::always_inline]] inline ContactResult contactForce(const study::ContactModel& model, const PairLaw& law,
+                                                         const ContactStiffness& s, const ContactKinematics& k, double dt,
+                                                         double rolling_dt, double cohesion, ContactHistory& h, bool wall) {
   using detail::cross3;
   using detail::dot3;
   ContactResult out{};
-  double unused_dmax = 0;
-  double* dmax = layout.delta_max >= 0 ? hist + layout.delta_max : &unused_dmax;
-  const double fn_contact = normalForce<N>(model, law, s, k, dmax);
-  const double fn = fn_contact + cohesionForce(model.cohesion, law, k, wall);
+  const double fn_contact = normalForce<N>(model, law, s, k, h.delta_max);
+  const double fn = fn_contact + cohesion;
   out.normal_force = fn;
 
   // Tangential force (Coulomb friction with a tangential spring).
   double ft[3];
   const double limit = law.friction * std::fabs(fn);
-  if (layout.shear >= 0) {
-    double* sh = hist + layout.shear;
-    for (int c = 0; c < 3; ++c) sh[c] += k.vt[c] * dt;
+  if constexpr (Shear) {
+    double sh[3];
+    for (int c = 0; c < 3; ++c) sh[c] = h.shear[c] + k.vt[c] * dt;
     const double rsht = dot3(sh, k.n);
     for (int c = 0; c < 3; ++c) sh[c] -= rsht * k.n[c];
     for (int c = 0; c < 3; ++c) ft[c] = -s.kt * sh[c];
     const double shear_force2 = s.kt * s.kt * dot3(sh, sh);
-    if (shear_force2 > limit * limit) {  // squares: no square root while the contact sticks
-      const double ratio = limit / std::sqrt(shear_force2);
-      for (int c = 0; c < 3; ++c) {
-        ft[c] *= ratio;
-        sh[c] = -ft[c] / s.kt;
-      }
-    } else {
-      for (int c = 0; c < 3; ++c) ft[c] -= s.gamma_t * k.vt[c];
+    const bool slips = shear_force2 > limit * limit;  // squares: the square root only scales a slip
+    const double ratio = limit / std::sqrt(shear_force2);
+    for (int c = 0; c < 3; ++c) {
+      const double slipping = ft[c] * ratio;
+      h.shear[c] = slips ? -slipping / s.kt : sh[c];
+      ft[c] = slips ? slipping : ft[c] - s.gamma_t * k.vt[c];
     }
   } else {
     const double vtm = std::sqrt(dot3(k.vt, k.vt));
@@ -281,43 +325,41 @@ template <study::NormalModel N, study::RollingModel R>
     out.torque_j[c] = -k.dj * nxft[c];
   }
 
-  // Rolling resistance.
+  // Rolling resistance (a torque that is not applied leaves the sum as it was, signed zeros too).
   if constexpr (R == study::RollingModel::EdemStandard) {
     const double f = law.rolling_friction * std::max(0.0, fn_contact);
     const double wim = std::max(std::sqrt(dot3(k.wi, k.wi)), rollingSpinScale(f * k.di, k.inv_ii, rolling_dt));
     const double wjm = std::max(std::sqrt(dot3(k.wj, k.wj)), rollingSpinScale(f * k.dj, k.inv_ij, rolling_dt));
     for (int c = 0; c < 3; ++c) {
-      if (wim > 0) out.torque_i[c] -= f * k.di * k.wi[c] / wim;
-      if (wjm > 0) out.torque_j[c] -= f * k.dj * k.wj[c] / wjm;
+      const double ti = out.torque_i[c] - f * k.di * k.wi[c] / wim;
+      const double tj = out.torque_j[c] - f * k.dj * k.wj[c] / wjm;
+      out.torque_i[c] = wim > 0 ? ti : out.torque_i[c];
+      out.torque_j[c] = wjm > 0 ? tj : out.torque_j[c];
     }
   } else if constexpr (R == study::RollingModel::Cdt) {
     const double wm = k.wrel_norm;
-    if (wm > 0) {
-      const double arm = wall ? k.di : k.reff;
-      const double scale = law.rolling_friction * s.kn * k.delta * arm / wm;
-      double tq[3];
-      for (int c = 0; c < 3; ++c) tq[c] = scale * k.wrel[c];
-      const double tn = dot3(tq, k.n);
-      for (int c = 0; c < 3; ++c) {
-        tq[c] -= tn * k.n[c];
-        out.torque_i[c] -= tq[c];
-        out.torque_j[c] += tq[c];
-      }
+    const double arm = wall ? k.di : k.reff;
+    const double scale = law.rolling_friction * s.kn * k.delta * arm / wm;
+    double tq[3];
+    for (int c = 0; c < 3; ++c) tq[c] = scale * k.wrel[c];
+    const double tn = dot3(tq, k.n);
+    for (int c = 0; c < 3; ++c) {
+      const double t = tq[c] - tn * k.n[c];
+      out.torque_i[c] = wm > 0 ? out.torque_i[c] - t : out.torque_i[c];
+      out.torque_j[c] = wm > 0 ? out.torque_j[c] + t : out.torque_j[c];
     }
   } else if constexpr (R == study::RollingModel::Epsd) {
     const double wn = dot3(k.wrel, k.n);
     const double kr = 2.25 * s.kn * law.rolling_friction * law.rolling_friction * k.reff * k.reff;
-    double* tq = hist + layout.roll;
-    for (int c = 0; c < 3; ++c) tq[c] += kr * (k.wrel[c] - wn * k.n[c]) * dt;
+    double tq[3];
+    for (int c = 0; c < 3; ++c) tq[c] = h.roll[c] + kr * (k.wrel[c] - wn * k.n[c]) * dt;
     const double mag = std::sqrt(dot3(tq, tq));
     const double cap = std::fabs(fn) * k.reff * law.rolling_friction;
-    if (mag > cap) {
-      const double f = cap / mag;
-      for (int c = 0; c < 3; ++c) tq[c] *= f;
-    }
+    const double f = cap / mag;
     for (int c = 0; c < 3; ++c) {
-      out.torque_i[c] -= tq[c];
-      out.torque_j[c] += tq[c];
+      h.roll[c] = mag > cap ? tq[c] * f : tq[c];
+      out.torque_i[c] -= h.roll[c];
+      out.torque_j[c] += h.roll[c];
     }
   }
   return out;

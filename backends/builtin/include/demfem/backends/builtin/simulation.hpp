@@ -83,6 +83,17 @@ struct ParticleState {
 
 struct WallTouch;  // a wall feature a particle touches (wall_forces.cpp)
 
+// The pair loop's touching contacts of a batch of rows as arrays, memory reused (pair_forces.cpp):
+// list slot, particles i (the row) and j, index of their PairLaw; squared distance, distance, its
+// inverse, cohesive force; the law's results (force on i, torques on i and j, overlap, the history
+// by its stored offset).
+struct PairBatch {
+  std::vector<std::int32_t> slot, i, j, law;
+  std::vector<double> r2, r, rinv, cohesion, delta;
+  std::vector<double> f[3], ti[3], tj[3], hist[HistoryLayout::kMaxSize];
+  void growTo(std::size_t slots);  // every array at least `slots` long (never shrinks)
+};
+
 class DemSimulation {
  public:
   DemSimulation(const study::Soil& soil, const Domain& domain, int threads);
@@ -171,7 +182,7 @@ class DemSimulation {
   struct WallContact {
     std::int32_t particle, wall;    // wall: plane index, or planes.size() + mesh index
     std::int64_t key;               // feature key (0 for a plane)
-    double hist[7];
+    double hist[HistoryLayout::kMaxSize];
     ContactStiffness stiffness;     // fixed for the particle-wall pair: computed when the contact opens
     std::int32_t nodes[3];
     std::int32_t padding;           // named: a checkpoint holds the struct's bytes (zero)
@@ -185,8 +196,7 @@ class DemSimulation {
     std::vector<double> f, t;            // pair force buffers (more than one part)
     std::vector<WallContact> wall;       // the wall contacts of its particles, in particle order
     std::vector<std::int32_t> rows;      // list build: the neighbours of its rows
-    std::vector<std::int32_t> batch_slot;  // pair loop: touching slots of a batch of rows
-    std::vector<double> batch_r2, batch_r, batch_rinv, batch_w2, batch_wnorm;
+    PairBatch batch;                     // pair loop: the touching contacts of a batch of rows
     double pair_max = 0, wall_max = 0;   // largest overlap of its pair and of its wall contacts
     std::int64_t pair_bad = -1, wall_bad = -1, kick_bad = -1;  // first failing particle, -1 none
     int wall_bad_wall = -1;              // the wall (planes, then meshes) of wall_bad's overlap
@@ -227,10 +237,10 @@ class DemSimulation {
   void updateMeshBinNodes();
   // pair_forces.cpp and wall_forces.cpp: each a loop per contact model (template arguments)
   void pairForces(int part);
-  template <study::NormalModel N, study::RollingModel R> void pairLoop(int part);
+  template <study::NormalModel N, study::RollingModel R, bool Shear> void pairLoop(int part);
   void sumPairForces(int part);
   void wallForces(int part);
-  template <study::NormalModel N, study::RollingModel R> void wallLoop(int part);
+  template <study::NormalModel N, study::RollingModel R, bool Shear> void wallLoop(int part);
   int planeTouches(std::size_t i, WallTouch* touch, int count) const;  // fine search: appends, returns the count
   int meshTouches(std::size_t i, WallTouch* touch, int count) const;
   void matchHistory(std::size_t i, const WallTouch* touch, int count, const bool* accepted, int* matched_old) const;
