@@ -20,6 +20,7 @@
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/backends/builtin/vector_isa.hpp"
 #include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
@@ -163,12 +164,14 @@ int main(int argc, char** argv) {
                           {"steps", steps},
                           {"rounds", rounds},
                           {"load_average_1min_start", loadAverage()},
+                          {"vector_isa", vectorIsaName(vectorIsa())},
                           {"cases", nlohmann::json::array()},
                           {"summary", nlohmann::json::array()}};
     const bool text = json_target != "-";
     if (text)
-      std::printf("tool at %.0f mm depth moving at %.2f mm/s, %ld steps per case, each model on its own settled bin\n\n",
-                  tool.motion.depth_m * 1e3, tool.motion.velocity_m_s * 1e3, steps);
+      std::printf("tool at %.0f mm depth moving at %.2f mm/s, %ld steps per case, each model on its own settled bin; "
+                  "pair loop on %s\n\n",
+                  tool.motion.depth_m * 1e3, tool.motion.velocity_m_s * 1e3, steps, vectorIsaName(vectorIsa()));
     if (text)
       std::printf("%-42s %9s %7s %8s %5s %11s %9s %9s %16s %10s %9s\n", "model", "particles", "threads", "compete",
                   "round", "dt_s", "wall_s", "cpu_s", "particle_steps/s", "bytes/part", "contacts");

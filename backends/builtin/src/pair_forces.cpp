@@ -8,9 +8,11 @@
 #include "demfem/backends/builtin/simulation.hpp"
 
 #include "contact_kinematics.hpp"
+#include "demfem/backends/builtin/vector_isa.hpp"
 #include "demfem/backends/physics/dem_assert.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace demfem::builtin {
@@ -31,22 +33,9 @@ constexpr std::size_t kBatchContacts = 256;  // touching contacts per batch (row
 #endif
 #define DEMFEM_INLINE __attribute__((always_inline))
 
-// runVectorised(f) runs f() compiled for the widest vector instruction set of the CPU: f is an
-// always-inline lambda, so its loops are compiled anew inside each runner. (Function clones of the
-// batch loops would do the same, but clang does not clone templates.)
-enum class VectorIsa { Avx512, Avx2, Baseline };
-
-VectorIsa hostVectorIsa() {
-#if defined(__x86_64__)
-  static const VectorIsa isa = __builtin_cpu_supports("avx512f") ? VectorIsa::Avx512
-                               : __builtin_cpu_supports("avx2")  ? VectorIsa::Avx2
-                                                                 : VectorIsa::Baseline;
-  return isa;
-#else
-  return VectorIsa::Baseline;
-#endif
-}
-
+// runVectorised(f) runs f() compiled for vectorIsa(): f is an always-inline lambda, so its loops
+// are compiled anew inside each runner. (Function clones of the batch loops would do the same, but
+// clang does not clone templates.)
 #if defined(__x86_64__)
 template <class F>
 [[gnu::target("avx512f")]] void runAvx512(const F& f) {
@@ -60,7 +49,7 @@ template <class F>
 
 template <class F>
 void runVectorised(const F& f) {
-  switch (hostVectorIsa()) {
+  switch (vectorIsa()) {
 #if defined(__x86_64__)
     case VectorIsa::Avx512: runAvx512(f); return;
     case VectorIsa::Avx2: runAvx2(f); return;
@@ -73,12 +62,11 @@ void runVectorised(const F& f) {
 }
 
 // What the loops over a batch read: the simulation's particle arrays, the pair laws, the list
-// slots' stiffness and history, and the batch's contacts (slot, i, j, law index; distance, inverse).
+// slots' stiffness, and the batch's contacts (slot, i, j, law index; distance, inverse).
 struct PairInputs {
   const double *x, *v, *w, *radius, *inv_inertia;
   const PairLaw* laws;
   const ContactStiffness* stiffness;
-  const double* history;
   const std::int32_t *slot, *i, *j, *law;
   const double *r, *rinv, *cohesion;
 };
@@ -115,13 +103,10 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
   double *ti0 = out.ti[0].data(), *ti1 = out.ti[1].data(), *ti2 = out.ti[2].data();
   double *tj0 = out.tj[0].data(), *tj1 = out.tj[1].data(), *tj2 = out.tj[2].data();
   double* delta = out.delta.data();
-  double* const h0 = out.hist[0].data();
-  double* const h1 = out.hist[1].data();
-  double* const h2 = out.hist[2].data();
-  double* const h3 = out.hist[3].data();
-  double* const h4 = out.hist[4].data();
-  double* const h5 = out.hist[5].data();
-  double* const h6 = out.hist[6].data();
+  // The history in the batch's arrays, one per stored offset (filled by the caller, updated here):
+  // contiguous loads, where reading it from the list slots would be a gather of the slot's stride.
+  double* const hist[HistoryLayout::kMaxSize] = {out.hist[0].data(), out.hist[1].data(), out.hist[2].data(), out.hist[3].data(),
+                                                 out.hist[4].data(), out.hist[5].data(), out.hist[6].data()};
   DEMFEM_INDEPENDENT_ITERATIONS
   for (std::size_t k = 0; k < count; ++k) {
     const std::size_t i = static_cast<std::size_t>(in.i[k]), j = static_cast<std::size_t>(in.j[k]);
@@ -135,7 +120,12 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
     kin.wrel_norm = std::sqrt(norm2(kin.wrel));
     kin.inv_ii = in.inv_inertia[i];
     kin.inv_ij = in.inv_inertia[j];
-    ContactHistory h = loadHistory(L, in.history + s * L.size);
+    ContactHistory h;
+    if constexpr (L.shear >= 0)
+      for (int c = 0; c < 3; ++c) h.shear[c] = hist[L.shear + c][k];
+    if constexpr (L.delta_max >= 0) h.delta_max = hist[L.delta_max][k];
+    if constexpr (L.roll >= 0)
+      for (int c = 0; c < 3; ++c) h.roll[c] = hist[L.roll + c][k];
     const ContactResult res =
         contactForce<N, R, Shear>(m, in.laws[in.law[k]], in.stiffness[s], kin, dt, rolling_dt, in.cohesion[k], h, false);
     f0[k] = res.force[0];
@@ -148,21 +138,41 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
     tj1[k] = res.torque_j[1];
     tj2[k] = res.torque_j[2];
     delta[k] = kin.delta;
-    if constexpr (L.shear >= 0) {
-      h0[k] = h.shear[0];
-      h1[k] = h.shear[1];
-      h2[k] = h.shear[2];
-    }
-    if constexpr (L.delta_max >= 0) (L.delta_max == 0 ? h0 : h3)[k] = h.delta_max;
-    if constexpr (L.roll >= 0) {
-      (L.roll == 1 ? h1 : h4)[k] = h.roll[0];
-      (L.roll == 1 ? h2 : h5)[k] = h.roll[1];
-      (L.roll == 1 ? h3 : h6)[k] = h.roll[2];
-    }
+    if constexpr (L.shear >= 0)
+      for (int c = 0; c < 3; ++c) hist[L.shear + c][k] = h.shear[c];
+    if constexpr (L.delta_max >= 0) hist[L.delta_max][k] = h.delta_max;
+    if constexpr (L.roll >= 0)
+      for (int c = 0; c < 3; ++c) hist[L.roll + c][k] = h.roll[c];
   }
 }
 
+std::atomic<VectorIsa> vector_isa_cap{VectorIsa::Avx512};
+
 }  // namespace
+
+VectorIsa hostVectorIsa() {
+#if defined(__x86_64__)
+  static const VectorIsa isa = __builtin_cpu_supports("avx512f") ? VectorIsa::Avx512
+                               : __builtin_cpu_supports("avx2")  ? VectorIsa::Avx2
+                                                                 : VectorIsa::Baseline;
+  return isa;
+#else
+  return VectorIsa::Baseline;
+#endif
+}
+
+VectorIsa vectorIsa() { return std::min(hostVectorIsa(), vector_isa_cap.load(std::memory_order_relaxed)); }
+
+void capVectorIsa(VectorIsa widest) { vector_isa_cap.store(widest, std::memory_order_relaxed); }
+
+const char* vectorIsaName(VectorIsa isa) {
+  switch (isa) {
+    case VectorIsa::Baseline: return "baseline";
+    case VectorIsa::Avx2: return "avx2";
+    case VectorIsa::Avx512: return "avx512";
+  }
+  return "unknown";
+}
 
 void PairBatch::growTo(std::size_t slots) {
   if (slot.size() >= slots) return;
@@ -206,8 +216,9 @@ void DemSimulation::pairLoop(int part) {
     std::size_t i1 = i0;
     while (i1 < hi && static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]) < kBatchContacts) ++i1;
     b.growTo(static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]));
-    // Their touching slots, written at the next free place whether touching or not and kept by
-    // advancing the count (no branch on the contact); a slot that stopped touching loses its history.
+    // Their touching slots with their histories, written at the next free place whether touching or
+    // not and kept by advancing the count (no branch on the contact); a slot that stopped touching
+    // loses its history.
     std::size_t count = 0;
     for (std::size_t i = i0; i < i1; ++i) {
       const double xi = x_[3 * i], yi = x_[3 * i + 1], zi = x_[3 * i + 2];
@@ -230,12 +241,14 @@ void DemSimulation::pairLoop(int part) {
         b.j[count] = j;
         b.law[count] = law_row + material_[j];
         b.r2[count] = r2;
+        const double* stored = nb_hist_.data() + static_cast<std::size_t>(s) * H;
+        for (int c = 0; c < H; ++c) b.hist[c][count] = stored[c];
         count += touching;
       }
     }
     runVectorised([&]() DEMFEM_INLINE { distances(b.r2.data(), count, b.r.data(), b.rinv.data()); });
     const PairInputs in{x_.data(),     v_.data(),     w_.data(),     radius_.data(), inv_inertia_.data(),
-                        table_.laws.data(), nb_stiff_.data(), nb_hist_.data(), b.slot.data(), b.i.data(),
+                        table_.laws.data(), nb_stiff_.data(), b.slot.data(), b.i.data(),
                         b.j.data(),    b.law.data(),  b.r.data(),    b.rinv.data(),  b.cohesion.data()};
     withCohesion(model_.cohesion, [&]<study::CohesionModel C>() {
       runVectorised([&]() DEMFEM_INLINE { pairCohesion<C>(in, count, b.cohesion.data()); });
