@@ -85,3 +85,28 @@ TEST_CASE("a team waits for a part that sleeps past the spin and wakes threads a
   copy.forEachPart([&](int part) { ++count[part]; });
   for (const int c : count) CHECK(c == 21);
 }
+
+// A worker that takes 2 ms for any part it runs stands for threads whose cores other processes
+// hold: the caller alone finishes a phase in microseconds, so after its first probes the team
+// leaves the phases to the caller, and only its later probes of the whole team reach the worker.
+TEST_CASE("a team whose other threads slow the phases down leaves them to the caller", "[builtin]") {
+  constexpr int kPhases = 3000;
+  ThreadTeam team(2, 2);
+  const auto caller = std::this_thread::get_id();
+  std::atomic<int> by_worker{0};
+  std::vector<int> runs(2, 0);
+  for (int phase = 0; phase < kPhases; ++phase)
+    team.forEachPart([&](int part) {
+      if (std::this_thread::get_id() != caller) {
+        by_worker.fetch_add(1);
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      }
+      ++runs[part];
+    });
+  CHECK(runs[0] == kPhases);
+  CHECK(runs[1] == kPhases);
+  // Probes of the whole team: the first 128 phases, then 128 after each 4096 + 128 alone: at most
+  // 128 worker parts here; the caller ran everything else alone.
+  CHECK(by_worker.load() <= 128);
+  CHECK(team.phasesAlone() >= kPhases - 128);
+}

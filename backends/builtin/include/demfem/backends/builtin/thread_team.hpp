@@ -18,6 +18,11 @@
 // - Wait policy, for a machine shared with other processes: a waiting thread spins for at most
 //   200 microseconds, or 10 once a thread of the team has been preempted lately (the machine is
 //   busy), then sleeps in the kernel until woken, giving its core to whoever can use it.
+// - Team or caller alone: the team times a probe of kProbePhases phases run by the whole team and
+//   one run by the caller alone (the other threads asleep), and runs the next kRunPhases phases
+//   the faster way, then probes again. On a machine whose other cores are taken by other
+//   processes the caller alone is the faster, and the team then runs at one thread's speed
+//   instead of waiting for threads that have no core. The numbers do not change (see above).
 // - Copying a team makes a new team of the same size (a simulation's copy gets its own threads).
 #pragma once
 
@@ -62,6 +67,60 @@ class ThreadTeam {
       for (int part = 0; part < parts_; ++part) body(part);
       return;
     }
+    const auto began = std::chrono::steady_clock::now();
+    if (choice_.alone()) {
+      for (int part = 0; part < parts_; ++part) body(part);
+    } else {
+      runTeamPhase(body);
+    }
+    choice_.record(std::chrono::steady_clock::now() - began);
+  }
+
+  // Phases the caller ran alone so far (for tests and benchmarks).
+  long phasesAlone() const { return choice_.phases_alone; }
+
+ private:
+  static constexpr int kProbePhases = 128, kRunPhases = 4096;
+
+  // Which way the next phase runs: a probe of the team, a probe of the caller alone, then the
+  // faster of the two for kRunPhases phases.
+  struct ModeChoice {
+    enum class Stage { ProbeTeam, ProbeAlone, Run };
+    Stage stage = Stage::ProbeTeam;
+    bool run_alone = false;
+    int phases = 0;
+    long phases_alone = 0;
+    std::chrono::nanoseconds spent{0}, team{0};
+
+    bool alone() const {
+      switch (stage) {
+        case Stage::ProbeTeam: return false;
+        case Stage::ProbeAlone: return true;
+        case Stage::Run: return run_alone;
+      }
+      return false;
+    }
+    void record(std::chrono::nanoseconds phase) {
+      phases_alone += alone();
+      spent += phase;
+      if (++phases < (stage == Stage::Run ? kRunPhases : kProbePhases)) return;
+      switch (stage) {
+        case Stage::ProbeTeam:
+          team = spent;
+          stage = Stage::ProbeAlone;
+          break;
+        case Stage::ProbeAlone:
+          run_alone = spent < team;
+          stage = Stage::Run;
+          break;
+        case Stage::Run: stage = Stage::ProbeTeam; break;
+      }
+      phases = 0;
+      spent = std::chrono::nanoseconds{0};
+    }
+  };
+
+  void runTeamPhase(const std::function<void(int)>& body) {
     body_ = &body;
     done_.store(0, std::memory_order_relaxed);
     const std::uint64_t phase = phase_.load(std::memory_order_relaxed) + 1;
@@ -71,7 +130,6 @@ class ThreadTeam {
     waitUntil([&] { return done_.load(std::memory_order_acquire) == static_cast<std::uint32_t>(parts_); }, 0);
   }
 
- private:
   static constexpr std::chrono::microseconds kSpinQuiet{200}, kSpinBusy{10};
   static constexpr int kCheckEvery = 64;    // waits between two looks at the preemption count
   static constexpr long kBusySwitches = 4;  // preemptions within them that mark the machine busy
@@ -151,6 +209,7 @@ class ThreadTeam {
   }
 
   void start() {
+    choice_ = ModeChoice{};
     stopping_.store(false);
     phase_.store(0);
     claimed_ = std::vector<std::atomic<std::uint64_t>>(static_cast<std::size_t>(parts_));
@@ -187,6 +246,7 @@ class ThreadTeam {
   std::vector<std::atomic<bool>> busy_;             // per thread: it was preempted lately
   std::vector<Preemptions> preemptions_;            // per thread, its own only
   std::atomic<bool> stopping_{false};
+  ModeChoice choice_;  // the caller's only
   std::mutex mutex_;
   std::condition_variable wake_;
 };
