@@ -261,7 +261,8 @@ nlohmann::ordered_json caseRecordJson(const study::Study& s) {
 std::string caseStudyRecord(const study::Study& s) { return caseRecordJson(s).dump(2) + '\n'; }
 
 std::string caseIdentity(const study::Study& s) {
-  nlohmann::ordered_json doc = caseRecordJson(s);
+  nlohmann::ordered_json doc = study::identityJson(s);
+  if (doc.contains("dem")) doc["dem"].erase("threads");
   doc.erase("notes");
   return doc.dump();
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
+#include <type_traits>
 
 namespace demfem::study::detail {
 
@@ -273,6 +274,27 @@ Applies appliesIn(const AppliesWhen& when, const KeyContext& context) {
   return when.test ? when.test(context) : Applies{};
 }
 
+// Whether `source` holds the value a default-constructed T has in `field`. Fields written by code
+// of their own are never at their default: they cannot be compared.
+template <class T>
+bool atDefault(const Field<T>& field, const T& source) {
+  static const T initial{};
+  return std::visit(
+      [&](const auto& f) {
+        using F = std::decay_t<decltype(f)>;
+        if constexpr (std::is_member_object_pointer_v<F>) {
+          return source.*f == initial.*f;
+        } else if constexpr (std::is_same_v<F, FileField<T>>) {
+          return source.*(f.member) == initial.*(f.member);
+        } else if constexpr (std::is_same_v<F, ChoiceField<T>>) {
+          return f.get(source) == f.get(initial);
+        } else {
+          return false;
+        }
+      },
+      field);
+}
+
 }  // namespace
 
 double fileValue(std::string_view key, double si) {
@@ -302,8 +324,11 @@ void readKeys(ObjectReader& o, const Section<T>& section, T& target, const KeyCo
 
 template <class T>
 void writeKeys(nlohmann::ordered_json& out, const Section<T>& section, const T& source, const KeyContext& context) {
-  for (const Key<T>& key : section.keys)
-    if (appliesIn(key.applies, context).state == Applies::Yes) std::visit(KeyWriter<T>{out, key, source}, key.field);
+  for (const Key<T>& key : section.keys) {
+    if (appliesIn(key.applies, context).state != Applies::Yes) continue;
+    if (context.identity_form && key.identity_omits_default && atDefault(key.field, source)) continue;
+    std::visit(KeyWriter<T>{out, key, source}, key.field);
+  }
 }
 
 // --- the table ----------------------------------------------------------------------------------
@@ -368,7 +393,8 @@ const Section<ContactModel>& contactSection() {
        {"rolling_regularisation_fraction", &ContactModel::rolling_regularisation_fraction, Need::Optional, leftOpen(0.0, 1.0),
         {}, rollingHasSpinScale(), {},
         "the DEM step at this fraction of the stiffest spring's critical step sets the rolling law's spin scale at every "
-        "shorter step (docs/builtin-dem.md)"},
+        "shorter step (docs/builtin-dem.md)",
+        true},
        {"tangential_history", &ContactModel::tangential_history, Need::Optional, {}, {}, always(), {},
         "Coulomb friction with a tangential spring (history)"},
        {"stiffness_factor", &ContactModel::stiffness_factor, Need::Required, leftOpen(0.0, 100.0), {},

@@ -33,6 +33,7 @@ struct KeyContext {
   std::optional<GeometryKind> geometry;  // of the tool whose keys are read
   bool deformable = true;                // of that tool
   bool explicit_dem_step = false;        // dem.dt_s given
+  bool identity_form = false;            // writing identityJson(): see Key::identity_omits_default
 };
 
 // Whether a key applies in a context; `reason` says why not ("the tool is rigid ...").
@@ -87,6 +88,9 @@ struct Key {
   AppliesWhen applies{};          // empty test: always
   std::string default_doc{};      // optional keys whose default is not the struct's initial value
   std::string doc{};              // one line for the docs
+  // A key added after results were kept, whose default gives the numbers of the studies written
+  // before it: identityJson() leaves it out at its default, so those studies stay the same case.
+  bool identity_omits_default = false;
 };
 
 // One object of the file: where it is (dotted, `[]` for array entries) and its keys in file order.

@@ -73,10 +73,32 @@ ordered_json toolJson(const Tool& tool, KeyContext context) {
   return out;
 }
 
-ordered_json demJson(const Study& study) {
+ordered_json demJson(const Study& study, const KeyContext& context) {
   ordered_json out;
-  writeKeys(out, detail::demSection(), study.dem, contextOf(study));
+  writeKeys(out, detail::demSection(), study.dem, context);
   return out;
+}
+
+ordered_json studyJson(const Study& study, const KeyContext& context) {
+  ordered_json out;
+  writeKeys(out, detail::topSection(), study, context);
+  if (hasSoil(study.kind)) out["soil"] = soilJson(study.soil, context);
+  out["tools"] = ordered_json::array();
+  for (const Tool& tool : study.tools) out["tools"].push_back(toolJson(tool, context));
+  if (study.weight_drop) writeKeys(out["weight_drop"], detail::weightDropSection(), *study.weight_drop, context);
+  writeKeys(out["fem"], detail::femSection(), study.fem, context);
+  if (hasSoil(study.kind)) {
+    out["dem"] = demJson(study, context);
+    writeKeys(out["coupling"], detail::couplingSection(), study.coupling, context);
+  }
+  writeKeys(out["output"], detail::outputSection(), study.output, context);
+  return out;
+}
+
+KeyContext identityContextOf(const Study& study) {
+  KeyContext context = contextOf(study);
+  context.identity_form = true;
+  return context;
 }
 
 void describeInto(std::ostringstream& out, const std::string& path, const std::string& key, const ordered_json& v) {
@@ -112,22 +134,9 @@ std::uint64_t fnv1a64(std::string_view bytes) {
   return hash;
 }
 
-ordered_json toJson(const Study& study) {
-  const KeyContext context = contextOf(study);
-  ordered_json out;
-  writeKeys(out, detail::topSection(), study, context);
-  if (hasSoil(study.kind)) out["soil"] = soilJson(study.soil, context);
-  out["tools"] = ordered_json::array();
-  for (const Tool& tool : study.tools) out["tools"].push_back(toolJson(tool, context));
-  if (study.weight_drop) writeKeys(out["weight_drop"], detail::weightDropSection(), *study.weight_drop, context);
-  writeKeys(out["fem"], detail::femSection(), study.fem, context);
-  if (hasSoil(study.kind)) {
-    out["dem"] = demJson(study);
-    writeKeys(out["coupling"], detail::couplingSection(), study.coupling, context);
-  }
-  writeKeys(out["output"], detail::outputSection(), study.output, context);
-  return out;
-}
+ordered_json toJson(const Study& study) { return studyJson(study, contextOf(study)); }
+
+ordered_json identityJson(const Study& study) { return studyJson(study, identityContextOf(study)); }
 
 std::string describe(const Study& study) {
   ordered_json doc = toJson(study);
@@ -145,12 +154,8 @@ std::string soilHash(const Study& study) {
   std::set<std::string> used{soil.bin_material};
   for (const Layer& l : soil.layers) used.insert(l.material);
   nlohmann::json canonical;  // std::map objects: keys sorted
-  canonical["soil"] = nlohmann::json::parse(soilJson(soil, contextOf(study)).dump());
-  // At its default the rolling regularisation does not enter: the deposition steps at a tenth of the
-  // critical step or more, where the spin scale follows the step, so soils deposited before the key
-  // existed stay valid.
-  if (soil.contact.rolling_regularisation_fraction == ContactModel{}.rolling_regularisation_fraction)
-    canonical["soil"]["contact"].erase("rolling_regularisation_fraction");
+  const KeyContext context = identityContextOf(study);
+  canonical["soil"] = nlohmann::json::parse(soilJson(soil, context).dump());
   nlohmann::json& materials = canonical["soil"]["materials"];
   nlohmann::json soil_materials = nlohmann::json::array();
   for (const auto& m : materials)
@@ -169,7 +174,7 @@ std::string soilHash(const Study& study) {
   }
   std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) { return a["materials"] < b["materials"]; });
   interactions = kept;
-  nlohmann::json dem = nlohmann::json::parse(demJson(study).dump());
+  nlohmann::json dem = nlohmann::json::parse(demJson(study, context).dump());
   dem.erase("seed");     // the run's seed; the deposition has soil.deposition.seed
   dem.erase("threads");  // one soil for every core count
   dem.erase("backend");  // the run's backend; the deposition's is soil.deposition.backend

@@ -13,6 +13,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -375,6 +376,41 @@ void writeParticleFiles(const fs::path& run_dir) {
 }
 
 }  // namespace
+
+TEST_CASE("the committed kept evaluations are of the shipped paper studies, also after keys were added to the study file", "[campaign][report]") {
+  // A key added later at the default that gives the earlier numbers must not make the kept runs
+  // "of another version of their study": the report would drop hours of full-scale runs.
+  TempDir dir("paper-report-committed");
+  const fs::path source = fs::path(DEMFEM_SOURCE_DIR);
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(source / "docs" / "paper-runs")) {
+    files.push_back(source / "studies" / "paper" / entry.path().filename());
+    fs::create_directories(dir / "report" / "paper-runs");
+    fs::copy_file(entry.path(), dir / "report" / "paper-runs" / entry.path().filename());
+  }
+  REQUIRE(files.size() >= 2);
+  std::sort(files.begin(), files.end());
+  fs::create_directories(dir / "campaign");
+  nlohmann::json doc;
+  writeStaged(dir / "report", [&](analysis::StagedOutput& out) { doc = writePaperReport(files, paperReportOptions(dir / "campaign"), out); });
+  for (const auto& c : doc["cases"]) {
+    INFO(c["case"]);
+    CHECK(c["kept"] == true);
+  }
+  CHECK(readText(dir / "report" / "paper-reproduction.md").find("Not used") == std::string::npos);
+
+  SECTION("but not after a value that changes the numbers") {
+    nlohmann::json changed = nlohmann::json::parse(readText(files.front()));
+    changed["soil"]["contact"]["rolling_regularisation_fraction"] = 0.05;
+    fs::create_directories(dir / "changed");
+    std::ofstream(dir / "changed" / files.front().filename()) << changed.dump(2);
+    std::vector<fs::path> changed_files = files;
+    changed_files.front() = dir / "changed" / files.front().filename();
+    writeStaged(dir / "report", [&](analysis::StagedOutput& out) { doc = writePaperReport(changed_files, paperReportOptions(dir / "campaign"), out); });
+    CHECK(doc["cases"][0]["kept"] == false);
+    CHECK(doc["cases"][1]["kept"] == true);
+  }
+}
 
 TEST_CASE("the paper report measures Fig. 16's soil motion of a run with particle files at 300 mm, and keeps it", "[campaign][report]") {
   TempDir dir("paper-report-soil-motion");

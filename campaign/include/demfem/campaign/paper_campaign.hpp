@@ -107,9 +107,10 @@ nlohmann::json toJson(const CampaignSummary& summary);
 // dem.threads, which may differ between an interrupted call and the one that resumes it.
 std::string caseStudyRecord(const study::Study& study);
 
-// What makes two versions of a study the same case: its record without the free-text `notes`,
-// compact. A note edited after a run neither makes that run "of another study" nor stales its
-// kept evaluation; any value that changes the numbers does.
+// What makes two versions of a study the same case: its study::identityJson() without dem.threads
+// and the free-text `notes`, compact. A note edited after a run, or a key added later at the default
+// that gives the earlier numbers, neither makes that run "of another study" nor stales its kept
+// evaluation; any value that changes the numbers does.
 std::string caseIdentity(const study::Study& study);
 bool sameCase(const study::Study& a, const study::Study& b);
 

@@ -303,6 +303,12 @@ std::string keyReference();
 // keys that apply to the study's kind and models. parseStudy(toJson(s).dump(), origin) == s.
 nlohmann::ordered_json toJson(const Study& study);
 
+// What makes two studies the same study: toJson() without the keys added after results were kept
+// that stand at their default (soil.contact.rolling_regularisation_fraction), so a study written
+// before such a key and one that spells out its default are one study. The soil hash and a
+// campaign's case identity are built on it.
+nlohmann::ordered_json identityJson(const Study& study);
+
 // The effective values with units, one "path = value unit" line each (for `demfem validate`), in
 // the file's units, e.g. "/tools/0/motion/depth_mm = 18 mm".
 std::string describe(const Study& study);
@@ -310,9 +316,9 @@ std::string describe(const Study& study);
 // Stable content hash of everything that determines the settled soil (for deposit reuse): FNV-1a
 // 64 of the canonical JSON text (sorted keys, shortest round-trip numbers) of the bin, fill height,
 // particle sizes, the particle and bin materials, layers, the interactions among them, the contact
-// model (soil.contact.rolling_regularisation_fraction only when not at its default), the deposition
-// settings (seed, threshold, deposition backend) and the DEM time step settings. Tools, the run's DEM backend (dem.backend), dem.seed and dem.threads do not enter: one
-// soil serves every backend and core count. 16 lowercase hex digits. Throws std::invalid_argument
+// model, the deposition settings (seed, threshold, deposition backend) and the DEM time step
+// settings, as identityJson() writes them. Tools, the run's DEM backend (dem.backend), dem.seed and
+// dem.threads do not enter: one soil serves every backend and core count. 16 lowercase hex digits. Throws std::invalid_argument
 // for kinds without soil.
 std::string soilHash(const Study& study);
 
