@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+using demfem::builtin::TeamModeChoice;
 using demfem::builtin::ThreadTeam;
 
 TEST_CASE("a team runs every part once per phase and each phase sees the writes of the one before", "[builtin]") {
@@ -88,9 +89,9 @@ TEST_CASE("a team waits for a part that sleeps past the spin and wakes threads a
 
 // A worker that takes 2 ms for any part it runs stands for threads whose cores other processes
 // hold: the caller alone finishes a phase in microseconds, so after its first probes the team
-// leaves the phases to the caller, and only its later probes of the whole team reach the worker.
+// leaves the phases to the caller, and its later probes of the whole team stop at their first phase.
 TEST_CASE("a team whose other threads slow the phases down leaves them to the caller", "[builtin]") {
-  constexpr int kPhases = 3000;
+  constexpr int kPhases = 9000;  // three probes of the team: 128 + 128 + 4096, 128 + 1 + 4096, 128 + 1
   ThreadTeam team(2, 2);
   const auto caller = std::this_thread::get_id();
   std::atomic<int> by_worker{0};
@@ -105,8 +106,55 @@ TEST_CASE("a team whose other threads slow the phases down leaves them to the ca
     });
   CHECK(runs[0] == kPhases);
   CHECK(runs[1] == kPhases);
-  // Probes of the whole team: the first 128 phases, then 128 after each 4096 + 128 alone: at most
-  // 128 worker parts here; the caller ran everything else alone.
-  CHECK(by_worker.load() <= 128);
-  CHECK(team.phasesAlone() >= kPhases - 128);
+  // Probes of the whole team: the first 128 phases, then after each 128 + 4096 alone one until the
+  // worker's first part (its 2 ms are longer than the caller's 128 phases; team phases whose parts
+  // the caller took both are fast and do not end it). At most 128 + 2 worker parts, where probes of
+  // 128 phases each give the worker about 384; the bound leaves room for a caller preempted during
+  // its own probe.
+  CHECK(by_worker.load() <= 160);
+  CHECK(team.phasesAlone() >= kPhases - 3 * 128);
+}
+
+namespace {
+
+// Phases run by a TeamModeChoice whose phases take `team` by the whole team and `alone` by the
+// caller alone; returns the phases the team ran.
+long teamPhases(TeamModeChoice& choice, long phases, std::chrono::nanoseconds team, std::chrono::nanoseconds alone) {
+  long by_team = 0;
+  for (long k = 0; k < phases; ++k) {
+    const bool caller_alone = choice.alone();
+    by_team += !caller_alone;
+    choice.record(caller_alone ? alone : team);
+  }
+  return by_team;
+}
+
+}  // namespace
+
+TEST_CASE("the team's choice runs the faster way and cuts the losing probe short", "[builtin]") {
+  using std::chrono::microseconds;
+  constexpr long kProbe = TeamModeChoice::kProbePhases, kRun = TeamModeChoice::kRunPhases;
+  SECTION("beside a busy process: the team's later probes stop at their first phase") {
+    TeamModeChoice choice;
+    // The team first (128), the caller alone wins (128 + 4096); then the caller alone is the
+    // incumbent (128) and the team's probe loses at its first 2 ms phase.
+    const long cycle1 = kProbe + kProbe + kRun, cycle2 = kProbe + 1 + kRun;
+    CHECK(teamPhases(choice, cycle1, microseconds(2000), microseconds(10)) == kProbe);
+    CHECK(teamPhases(choice, 3 * cycle2, microseconds(2000), microseconds(10)) == 3);
+    CHECK(choice.phasesAlone() == cycle1 - kProbe + 3 * (cycle2 - 1));
+  }
+  SECTION("on a quiet machine: the caller's probe stops once it is the slower") {
+    TeamModeChoice choice;
+    // Team 6 us, alone 10 us a phase: the team's probe takes 768 us, the caller's loses at its 77th
+    // phase (770 us).
+    const long alone_probe = 77, cycle = kProbe + alone_probe + kRun;
+    CHECK(teamPhases(choice, 4 * cycle, microseconds(6), microseconds(10)) == 4 * (kProbe + kRun));
+    CHECK(choice.phasesAlone() == 4 * alone_probe);
+  }
+  SECTION("a challenger that is faster over its whole probe takes over") {
+    TeamModeChoice choice;
+    const long cycle = 2 * kProbe + kRun;
+    CHECK(teamPhases(choice, cycle, microseconds(10), microseconds(9)) == kProbe);
+    CHECK(choice.alone());
+  }
 }

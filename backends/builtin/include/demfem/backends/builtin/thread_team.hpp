@@ -18,9 +18,10 @@
 // - Wait policy, for a machine shared with other processes: a waiting thread spins for at most
 //   200 microseconds, or 10 once a thread of the team has been preempted lately (the machine is
 //   busy), then sleeps in the kernel until woken, giving its core to whoever can use it.
-// - Team or caller alone: the team times a probe of kProbePhases phases run by the whole team and
-//   one run by the caller alone (the other threads asleep), and runs the next kRunPhases phases
-//   the faster way, then probes again. On a machine whose other cores are taken by other
+// - Team or caller alone: the team times a probe of kProbePhases phases run the way it runs now
+//   and one run the other way (by the whole team, or by the caller alone with the other threads
+//   asleep), the second cut short once it is the slower, and runs the next kRunPhases phases the
+//   faster way, then probes again. On a machine whose other cores are taken by other
 //   processes the caller alone is the faster, and the team then runs at one thread's speed
 //   instead of waiting for threads that have no core. The numbers do not change (see above).
 // - Copying a team makes a new team of the same size (a simulation's copy gets its own threads).
@@ -43,6 +44,60 @@ namespace demfem::builtin {
 
 // Involuntary context switches of the calling thread so far (0 where the system does not say).
 long involuntaryContextSwitches();
+
+// Which way a thread team runs its next phase (ThreadTeam's contract, "Team or caller alone"):
+// record() takes each phase's wall time, alone() says whether the next phase is the caller's alone.
+// The way running now (the incumbent; the whole team at first) is timed over kProbePhases phases,
+// then the other way (the challenger) over as many, stopped as soon as it has taken longer in all
+// than the incumbent's probe: it has lost, and a challenger whose threads have no core costs one
+// slow phase, not a probe's worth. The faster way then runs the next kRunPhases phases.
+class TeamModeChoice {
+ public:
+  static constexpr int kProbePhases = 128, kRunPhases = 4096;
+
+  bool alone() const {
+    switch (stage_) {
+      case Stage::ProbeIncumbent:
+      case Stage::Run: return run_alone_;
+      case Stage::ProbeChallenger: return !run_alone_;
+    }
+    return run_alone_;
+  }
+
+  void record(std::chrono::nanoseconds phase) {
+    phases_alone_ += alone();
+    spent_ += phase;
+    ++phases_;
+    switch (stage_) {
+      case Stage::ProbeIncumbent:
+        if (phases_ < kProbePhases) return;
+        incumbent_ = spent_;
+        stage_ = Stage::ProbeChallenger;
+        break;
+      case Stage::ProbeChallenger:
+        if (spent_ <= incumbent_ && phases_ < kProbePhases) return;
+        if (spent_ < incumbent_) run_alone_ = !run_alone_;
+        stage_ = Stage::Run;
+        break;
+      case Stage::Run:
+        if (phases_ < kRunPhases) return;
+        stage_ = Stage::ProbeIncumbent;
+        break;
+    }
+    phases_ = 0;
+    spent_ = std::chrono::nanoseconds{0};
+  }
+
+  long phasesAlone() const { return phases_alone_; }
+
+ private:
+  enum class Stage { ProbeIncumbent, ProbeChallenger, Run };
+  Stage stage_ = Stage::ProbeIncumbent;
+  bool run_alone_ = false;  // the incumbent
+  int phases_ = 0;          // of the current stage
+  long phases_alone_ = 0;
+  std::chrono::nanoseconds spent_{0}, incumbent_{0};
+};
 
 class ThreadTeam {
  public:
@@ -77,49 +132,9 @@ class ThreadTeam {
   }
 
   // Phases the caller ran alone so far (for tests and benchmarks).
-  long phasesAlone() const { return choice_.phases_alone; }
+  long phasesAlone() const { return choice_.phasesAlone(); }
 
  private:
-  static constexpr int kProbePhases = 128, kRunPhases = 4096;
-
-  // Which way the next phase runs: a probe of the team, a probe of the caller alone, then the
-  // faster of the two for kRunPhases phases.
-  struct ModeChoice {
-    enum class Stage { ProbeTeam, ProbeAlone, Run };
-    Stage stage = Stage::ProbeTeam;
-    bool run_alone = false;
-    int phases = 0;
-    long phases_alone = 0;
-    std::chrono::nanoseconds spent{0}, team{0};
-
-    bool alone() const {
-      switch (stage) {
-        case Stage::ProbeTeam: return false;
-        case Stage::ProbeAlone: return true;
-        case Stage::Run: return run_alone;
-      }
-      return false;
-    }
-    void record(std::chrono::nanoseconds phase) {
-      phases_alone += alone();
-      spent += phase;
-      if (++phases < (stage == Stage::Run ? kRunPhases : kProbePhases)) return;
-      switch (stage) {
-        case Stage::ProbeTeam:
-          team = spent;
-          stage = Stage::ProbeAlone;
-          break;
-        case Stage::ProbeAlone:
-          run_alone = spent < team;
-          stage = Stage::Run;
-          break;
-        case Stage::Run: stage = Stage::ProbeTeam; break;
-      }
-      phases = 0;
-      spent = std::chrono::nanoseconds{0};
-    }
-  };
-
   void runTeamPhase(const std::function<void(int)>& body) {
     body_ = &body;
     done_.store(0, std::memory_order_relaxed);
@@ -209,7 +224,7 @@ class ThreadTeam {
   }
 
   void start() {
-    choice_ = ModeChoice{};
+    choice_ = TeamModeChoice{};
     stopping_.store(false);
     phase_.store(0);
     claimed_ = std::vector<std::atomic<std::uint64_t>>(static_cast<std::size_t>(parts_));
@@ -246,7 +261,7 @@ class ThreadTeam {
   std::vector<std::atomic<bool>> busy_;             // per thread: it was preempted lately
   std::vector<Preemptions> preemptions_;            // per thread, its own only
   std::atomic<bool> stopping_{false};
-  ModeChoice choice_;  // the caller's only
+  TeamModeChoice choice_;  // the caller's only
   std::mutex mutex_;
   std::condition_variable wake_;
 };
