@@ -318,8 +318,8 @@ std::string describe(const Study& study);
 // particle sizes, the particle and bin materials, layers, the interactions among them, the contact
 // model, the deposition settings (seed, threshold, deposition backend) and the DEM time step
 // settings, as identityJson() writes them. Tools, the run's DEM backend (dem.backend), dem.seed and
-// dem.threads do not enter: one soil serves every backend and core count. 16 lowercase hex digits. Throws std::invalid_argument
-// for kinds without soil.
+// dem.threads do not enter: one soil serves every backend and core count. 16 lowercase hex digits.
+// Throws std::invalid_argument for kinds without soil.
 std::string soilHash(const Study& study);
 
 // True for the kinds that simulate soil (coupled, dem-only, cone-penetration).
