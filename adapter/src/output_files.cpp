@@ -71,9 +71,12 @@ void CheckedFile::sync() {
   if (fd_ >= 0 && ::fsync(fd_) != 0 && errno != EINVAL) fail("sync");
 }
 
-void CheckedFile::close() {
+void CheckedFile::close(Durability durability) {
   if (fd_ < 0) return;
-  sync();
+  switch (durability) {
+    case Durability::Synced: sync(); break;
+    case Durability::Unsynced: break;
+  }
   const int fd = fd_;
   fd_ = -1;
   if (::close(fd) != 0) fail("close");
@@ -112,7 +115,7 @@ void renameChecked(const fs::path& from, const fs::path& to) {
   if (ec) throw OutputError("renaming " + from.string() + " to " + to.string() + " failed (" + ec.message() + ")");
 }
 
-void writeFileAtomically(const fs::path& file, std::string_view bytes) {
+void writeFileAtomically(const fs::path& file, std::string_view bytes, Durability durability) {
   // One temporary per process and thread: concurrent writers of one file never share it.
   std::ostringstream tag;
   tag << ::getpid() << '-' << std::this_thread::get_id();
@@ -120,7 +123,7 @@ void writeFileAtomically(const fs::path& file, std::string_view bytes) {
   try {
     CheckedFile out(tmp, CheckedFile::Mode::Truncate);
     out.write(bytes);
-    out.close();
+    out.close(durability);
     renameChecked(tmp, file);
   } catch (const OutputError&) {
     std::error_code ignored;
@@ -149,7 +152,7 @@ void VtkSeries::add(double time_s, const std::string& data_file) {
   for (const auto& [t, name] : entries_)
     s << "    <DataSet timestep=\"" << timeText(t) << "\" part=\"0\" file=\"" << name << "\"/>\n";
   s << "  </Collection>\n</VTKFile>\n";
-  writeFileAtomically(pvd_, s.str());
+  writeFileAtomically(pvd_, s.str(), Durability::Unsynced);
 }
 
 }  // namespace demfem::adapter

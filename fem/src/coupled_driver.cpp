@@ -307,7 +307,7 @@ struct CoupledDriver::Impl {
     char name[24];
     std::snprintf(name, sizeof name, "_%06lld.vtu", static_cast<long long>(s.step));
     const std::string file = "fem-" + tool_.name + name;
-    adapter::writeFileAtomically(vtkDirectory() / file, vtkio::encode(d, vtkio::Format::UnstructuredGrid));
+    adapter::writeFileAtomically(vtkDirectory() / file, vtkio::encode(d, vtkio::Format::UnstructuredGrid), adapter::Durability::Unsynced);
     vtk_series_->add(t, file);
   }
 

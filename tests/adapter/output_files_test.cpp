@@ -1,6 +1,7 @@
-// The run lock (adapter/output_files.hpp, DirectoryLock): a held output directory refuses a second
-// run at once, naming the holder, from this process or another; the lock dies with its holder,
-// also when the holder is killed.
+// Checked outputs (adapter/output_files.hpp). The run lock (DirectoryLock): a held output directory
+// refuses a second run at once, naming the holder, from this process or another; the lock dies
+// with its holder, also when the holder is killed. The atomic whole-file write: either durability
+// replaces the file whole and leaves no temporary; a failed write leaves the old content.
 #include "demfem/adapter/output_files.hpp"
 #include "support/temp_dir.hpp"
 
@@ -10,11 +11,15 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <filesystem>
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <string>
 
 using namespace demfem;
 using demfem::adapter::DirectoryLock;
+using demfem::adapter::Durability;
 using demfem::adapter::OutputError;
 
 TEST_CASE("a second claim on a held output directory fails at once and names the holder", "[adapter]") {
@@ -48,4 +53,33 @@ TEST_CASE("a killed run leaves no stale lock on its output directory", "[adapter
   CHECK_NOTHROW(DirectoryLock(dir));
   ::close(ready[0]);
   ::close(ready[1]);
+}
+
+namespace {
+
+std::string contentOf(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("an atomic write replaces the file whole at either durability and leaves no temporary", "[adapter]") {
+  const auto dir = support::freshDir("atomic-write");
+  const auto file = dir / "series.pvd";
+  for (const Durability durability : {Durability::Synced, Durability::Unsynced}) {
+    const std::string bytes(100000 + static_cast<int>(durability), durability == Durability::Synced ? 's' : 'u');
+    adapter::writeFileAtomically(file, bytes, durability);
+    CHECK(contentOf(file) == bytes);
+  }
+  CHECK(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()) == 1);
+  // A write whose rename fails (the name is taken by a directory) names the file, removes its
+  // temporary and leaves what was there.
+  const auto taken = dir / "taken";
+  std::filesystem::create_directories(taken / "inside");
+  CHECK_THROWS_WITH(adapter::writeFileAtomically(taken, "x", Durability::Unsynced), Catch::Contains("renaming") && Catch::Contains(taken.string()));
+  CHECK(std::filesystem::is_directory(taken / "inside"));
+  CHECK(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()) == 2);
 }

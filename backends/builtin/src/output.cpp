@@ -17,7 +17,7 @@ void DemSimulation::writeParticlesVtk(const std::filesystem::path& file) const {
   for (std::size_t i = 0; i < n; ++i)  // the contact force: the last evaluation's total minus gravity
     for (int c = 0; c < 3; ++c) force.values[3 * i + c] = f_[3 * i + c] - mass_[i] * gravity_[c];
   d.arrays = {{"radius_m", 1, radius_, vtkio::ValueType::Float64}, {"velocity_m_s", 3, v_, vtkio::ValueType::Float64}, layer, force};
-  adapter::writeFileAtomically(file, vtkio::encode(d, vtkio::Format::PolyData));
+  adapter::writeFileAtomically(file, vtkio::encode(d, vtkio::Format::PolyData), adapter::Durability::Unsynced);
 }
 
 void DemSimulation::writeMeshVtk(int m, const std::filesystem::path& file) const {
@@ -32,7 +32,7 @@ void DemSimulation::writeMeshVtk(int m, const std::filesystem::path& file) const
     }
   for (const auto& t : mesh.triangles) d.triangles.push_back({t[0], t[1], t[2]});
   d.arrays = {displacement, {"force_N", 3, mesh_force_[m], vtkio::ValueType::Float64}};
-  adapter::writeFileAtomically(file, vtkio::encode(d, vtkio::Format::PolyData));
+  adapter::writeFileAtomically(file, vtkio::encode(d, vtkio::Format::PolyData), adapter::Durability::Unsynced);
 }
 
 }  // namespace demfem::builtin
