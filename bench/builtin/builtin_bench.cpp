@@ -15,8 +15,7 @@
 // interleaved rounds (1 2 1 2 ...: a machine shared with other work slows all counts alike), with
 // the process CPU time beside the wall time. With --compete each count is also timed beside a
 // competing busy process (one more runnable process than the 2 cores hold), which is where a
-// spinning thread team collapses. With --parts-per-thread each count of parts per thread (how
-// finely the particles are split for more than one thread) is timed too. Prints a table of every timing and the medians and ratios per
+// spinning thread team collapses. Prints a table of every timing and the medians and ratios per
 // round; --json FILE writes the figures (units in the keys) with the load average before and after.
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
@@ -65,10 +64,9 @@ TriangleMesh plateMesh(const study::Tool& tool, int material) {
 }
 
 // The bin with the settled particles (states given) and the tool at depth moving at its velocity.
-DemSimulation makeBin(const study::Study& st, const std::vector<ParticleState>& particles, int threads, int parts_per_thread,
-                      Vec3 tool_origin) {
+DemSimulation makeBin(const study::Study& st, const std::vector<ParticleState>& particles, int threads, Vec3 tool_origin) {
   const study::Soil& soil = st.soil;
-  DemSimulation sim(soil, binDomain(soil), threads, parts_per_thread);
+  DemSimulation sim(soil, binDomain(soil), threads);
   addBinWalls(sim, soil);
   for (const auto& p : particles) sim.addParticle(p);
   const auto& tool = st.tools.at(0);
@@ -109,13 +107,6 @@ struct Timing {
   double wall_s = 0, cpu_s = 0, rate = 0;
 };
 
-// One timed configuration of a round.
-struct Variant {
-  int threads = 1, parts_per_thread = 1;
-  bool competitor = false;
-  auto operator<=>(const Variant&) const = default;
-};
-
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
@@ -135,10 +126,6 @@ int main(int argc, char** argv) {
   app.add_option("--soil-dir", soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
   app.add_option("--steps", steps, "Timed drag steps per case")->check(CLI::PositiveNumber);
   app.add_option("--threads", thread_counts, "Thread counts to time");
-  std::vector<int> parts_per_thread{DemSimulation::kPartsPerThread};
-  app.add_option("--parts-per-thread", parts_per_thread,
-                 "Parts of the particles per thread with more than one thread, each count timed (default: the engine's)")
-      ->check(CLI::PositiveNumber);
   double settle_J = 1e-3;
   app.add_option("--settle-J", settle_J,
                  "Kinetic energy (J) below which the benchmark soil counts as settled")
@@ -186,7 +173,7 @@ int main(int argc, char** argv) {
                   "pair loop on %s\n\n",
                   tool.motion.depth_m * 1e3, tool.motion.velocity_m_s * 1e3, steps, vectorIsaName(vectorIsa()));
     if (text)
-      std::printf("%-42s %9s %7s %5s %8s %5s %11s %9s %9s %16s %10s %9s\n", "model", "particles", "threads", "parts", "compete",
+      std::printf("%-42s %9s %7s %8s %5s %11s %9s %9s %16s %10s %9s\n", "model", "particles", "threads", "compete",
                   "round", "dt_s", "wall_s", "cpu_s", "particle_steps/s", "bytes/part", "contacts");
     for (const auto& label : only)
       if (std::none_of(cases.begin(), cases.end(), [&](const ModelCase& c) { return c.label == label; }))
@@ -228,20 +215,14 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < sim.particleCount(); ++i) states.push_back(sim.particle(i));
         origin = sim.mesh(m).offset(sim.time());
       }
-      // Interleaved rounds: every (threads, parts per thread, competitor) variant once per round, the
-      // same soil state (one thread has one part whatever the count).
-      std::vector<Variant> variants;
+      // Interleaved rounds: every (threads, competitor) variant once per round, the same soil state.
+      std::vector<std::pair<int, bool>> variants;
       for (const bool with_competitor : compete ? std::vector<bool>{false, true} : std::vector<bool>{false})
-        for (const int threads : thread_counts)
-          for (const int parts : parts_per_thread) {
-            variants.push_back({threads, parts, with_competitor});
-            if (threads == 1) break;
-          }
-      std::map<Variant, std::vector<Timing>> timings;
+        for (const int threads : thread_counts) variants.emplace_back(threads, with_competitor);
+      std::map<std::pair<int, bool>, std::vector<Timing>> timings;
       for (int round = 0; round < rounds; ++round)
-        for (const auto& variant : variants) {
-          const auto [threads, parts, with_competitor] = variant;
-          DemSimulation sim = makeBin(st, states, threads, parts, origin);
+        for (const auto& [threads, with_competitor] : variants) {
+          DemSimulation sim = makeBin(st, states, threads, origin);
           sim.setTimeStep(physics::demTimeStep(st).step_s);
           sim.run(10);  // lists and first forces outside the timing
           std::unique_ptr<Competitor> competitor;
@@ -256,15 +237,14 @@ int main(int argc, char** argv) {
           t.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
           competitor.reset();
           t.rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
-          timings[variant].push_back(t);
+          timings[{threads, with_competitor}].push_back(t);
           if (text)
-            std::printf("%-42s %9zu %7d %5d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(),
-                        threads, threads == 1 ? 1 : parts, with_competitor ? "yes" : "no", round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate,
+            std::printf("%-42s %9zu %7d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(),
+                        threads, with_competitor ? "yes" : "no", round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate,
                         sim.bytesPerParticle(), sim.contactCount());
           report["cases"].push_back({{"model", c.label},
                                      {"particles", sim.particleCount()},
                                      {"threads", threads},
-                                     {"parts_per_thread", threads == 1 ? 1 : parts},
                                      {"competing_process", with_competitor},
                                      {"round", round + 1},
                                      {"dt_s", sim.timeStep()},
@@ -277,7 +257,7 @@ int main(int argc, char** argv) {
       // Per variant: median rate; against 1 thread of the same round (and competitor setting): the
       // ratio per round, its median and its smallest value.
       for (const auto& [variant, list] : timings) {
-        const auto& base = timings[{thread_counts.front(), parts_per_thread.front(), variant.competitor}];
+        const auto& base = timings[{thread_counts.front(), variant.second}];
         std::vector<double> rates, ratios;
         for (std::size_t r = 0; r < list.size(); ++r) {
           rates.push_back(list[r].rate);
@@ -285,15 +265,13 @@ int main(int argc, char** argv) {
         }
         const double med = median(rates), ratio = median(ratios), worst = *std::min_element(ratios.begin(), ratios.end());
         if (text)
-          std::printf("%s, %d thread(s), %d part(s) each%s: median %.3e particle-steps/s; over %d thread(s) in the same round: "
-                      "median %.2fx, lowest %.2fx\n",
-                      c.label.c_str(), variant.threads, variant.threads == 1 ? 1 : variant.parts_per_thread,
-                      variant.competitor ? " beside a competing process" : "", med,
+          std::printf("%s, %d thread(s)%s: median %.3e particle-steps/s; over %d thread(s) in the same round: median %.2fx, "
+                      "lowest %.2fx\n",
+                      c.label.c_str(), variant.first, variant.second ? " beside a competing process" : "", med,
                       thread_counts.front(), ratio, worst);
         report["summary"].push_back({{"model", c.label},
-                                     {"threads", variant.threads},
-                                     {"parts_per_thread", variant.threads == 1 ? 1 : variant.parts_per_thread},
-                                     {"competing_process", variant.competitor},
+                                     {"threads", variant.first},
+                                     {"competing_process", variant.second},
                                      {"median_particle_steps_per_s", med},
                                      {"median_ratio_to_first_thread_count", ratio},
                                      {"lowest_ratio_to_first_thread_count", worst}});

@@ -196,7 +196,7 @@ void DemSimulation::checkRestoredAgainst(const DemSimulation& live, const adapte
   for (const auto& k : nb_stiff_)
     require(std::isfinite(k.kn) && std::isfinite(k.kt) && std::isfinite(k.gamma_n) && std::isfinite(k.gamma_t),
             "a pair stiffness is not finite");
-  require(part_window_end_.empty() || part_window_end_.size() == static_cast<std::size_t>(parts_),
+  require(part_window_end_.empty() || part_window_end_.size() == static_cast<std::size_t>(threads_),
           "part windows have the wrong count");
   for (const auto end : part_window_end_) require(end <= n, "a part window ends past the particles");
   // Wall candidates and contacts.

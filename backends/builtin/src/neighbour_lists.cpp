@@ -48,8 +48,8 @@ void DemSimulation::rebuildLists() {
   nb_stiff_.swap(next_stiff_);
   nb_hist_.swap(next_hist_);
   nb_touch_.swap(next_touch_);
-  part_window_end_.assign(parts_, 0);
-  for (int p = 0; p < parts_; ++p) {
+  part_window_end_.assign(threads_, 0);
+  for (int p = 0; p < threads_; ++p) {
     std::size_t end = rangeEnd(p);
     for (std::int32_t s = build_start_[rangeBegin(p)]; s < build_start_[rangeEnd(p)]; ++s)
       end = std::max(end, static_cast<std::size_t>(build_j_[s]) + 1);

@@ -21,15 +21,14 @@ using detail::norm2;
 
 // ---------------------------------------------------------------- construction
 
-DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int threads, int parts_per_thread)
+DemSimulation::DemSimulation(const study::Soil& soil, const Domain& domain, int threads)
     : table_(MaterialTable::fromSoil(soil)),
       model_(soil.contact),
       layout_(HistoryLayout::of(soil.contact)),
       domain_(domain),
       threads_(std::max(1, threads)),
-      parts_(threads_ == 1 ? 1 : threads_ * std::max(1, parts_per_thread)),
-      team_(threads_, parts_),
-      part_(parts_) {
+      team_(threads_, threads_),
+      part_(threads_) {
   used_.assign(table_.materials.size(), 0);
   if (model_.normal != study::NormalModel::EdemHysteretic)
     for (const auto& m : table_.materials)

@@ -248,7 +248,7 @@ void DemSimulation::wallLoop(int part) {
 // their CSR offsets per particle.
 void DemSimulation::gatherWallContacts() {
   const std::size_t n = particleCount();
-  if (parts_ == 1) {
+  if (threads_ == 1) {
     wall_contacts_.swap(part_[0].wall);  // the old contacts' memory is reused next step
   } else {
     wall_contacts_.clear();

@@ -13,11 +13,9 @@
 //   (particle, wall, feature) (walls, with the history handed on when a contact slides from one
 //   feature of a mesh to the next).
 // - Determinism: with the same inputs and thread count, results are bit-identical. The particles
-//   are split into parts (a static partition: one with one thread, partsPerThread() per thread
-//   with more, so that a thread done with its own parts takes over one another thread has not
-//   begun and the load evens out); each part sums pair forces into its own buffer and the buffers
-//   are added in part order, whichever thread ran each part. Wall contacts are gathered in
-//   particle order.
+//   are split into as many parts as threads (a static partition); each part sums pair forces into
+//   its own buffer and the buffers are added in part order, whichever thread ran each part. Wall
+//   contacts are gathered in particle order.
 // - Threads: each simulation owns its team of `threads` threads (a copy gets its own); a step is a
 //   few phases of the team, each running every part once on whichever threads have a core
 //   (docs/builtin-dem.md, "Threads on a shared machine"). A simulation is used by one caller at a
@@ -98,11 +96,7 @@ struct PairBatch {
 
 class DemSimulation {
  public:
-  // Parts per thread with more than one thread (see Determinism); the default is measured in
-  // docs/builtin-dem.md, "Threads on a shared machine". Another count changes the rounding of the
-  // force sums, so results are bit-identical for one count only.
-  static constexpr int kPartsPerThread = 1;
-  DemSimulation(const study::Soil& soil, const Domain& domain, int threads, int parts_per_thread = kPartsPerThread);
+  DemSimulation(const study::Soil& soil, const Domain& domain, int threads);
 
   const MaterialTable& materials() const { return table_; }
   const study::ContactModel& contactModel() const { return model_; }
@@ -221,8 +215,8 @@ class DemSimulation {
   };
 
   // Particles [lo, hi) of part `part` (the static partition every loop uses).
-  std::size_t rangeBegin(int part) const { return particleCount() * part / parts_; }
-  std::size_t rangeEnd(int part) const { return particleCount() * (part + 1) / parts_; }
+  std::size_t rangeBegin(int part) const { return particleCount() * part / threads_; }
+  std::size_t rangeEnd(int part) const { return particleCount() * (part + 1) / threads_; }
 
   // simulation.cpp: the step is a sequence of phases of the team, each run once per part, with the
   // serial work between them on the calling thread.
@@ -278,7 +272,6 @@ class DemSimulation {
   HistoryLayout layout_;
   Domain domain_;
   int threads_;
-  int parts_;  // of the static partition (1 with one thread)
   Vec3 gravity_{0, -9.81, 0};
   double damping_per_s_ = 0;
   double dt_ = 0, time_ = 0, rolling_step_s_ = 0;
