@@ -82,19 +82,29 @@ int main(int argc, char** argv) {
     o.jobs = jobs;
     o.threads = threads;
     cli::Progress progress("convergence");
-    // The runs of this call, each weighed by its cost (DEM steps go as 1 / fraction); runs kept from
-    // an earlier call are not part of the time left.
-    o.on_progress = [&progress, &variants](const campaign::CampaignProgress& p) {
-      double done = 0, total = 0;
+    // The runs of this call, each weighed by its cost (DEM steps go as 1 / fraction; every run has
+    // the same FEM steps); runs kept from an earlier call are not part of the time left. The time
+    // left is the work left at the rate of this call's work, not counting the steps a run resumed
+    // from its checkpoint had done before.
+    std::vector<std::int64_t> first_step(variants.size(), -1);
+    o.on_progress = [&progress, &variants, &first_step](const campaign::CampaignProgress& p) {
+      std::int64_t plan = 0;
+      for (const campaign::CaseStatus& c : *p.cases) plan = std::max(plan, c.total_steps);
+      double done = 0, total = 0, done_now = 0;
       int runs = 0;
       for (std::size_t i = 0; i < p.cases->size(); ++i) {
         const campaign::CaseStatus& c = (*p.cases)[i];
         if (c.done_before) continue;
         const double cost = 1.0 / variants[i].first;
-        total += cost, ++runs;
-        done += cost * (c.state == campaign::CaseState::Done ? 1.0 : (c.total_steps > 0 ? double(c.step) / double(c.total_steps) : 0.0));
+        const std::int64_t step = c.state == campaign::CaseState::Done ? plan : c.step;
+        if (first_step[i] < 0 && c.step > 0) first_step[i] = c.step - 1;  // its first report is one step on
+        total += cost * static_cast<double>(plan), ++runs;
+        done += cost * static_cast<double>(step);
+        done_now += cost * static_cast<double>(step - std::max<std::int64_t>(first_step[i], 0));
       }
-      if (total > 0) progress.update(done / total, std::to_string(runs) + " runs to make");
+      if (!(total > 0)) return;
+      const double left = done_now > 0 ? (total - done) * p.elapsed_s / done_now : -1.0;
+      progress.update(done / total, left, std::to_string(runs) + " runs to make");
     };
     std::signal(SIGINT, onStop);
     o.stop_requested = [] { return g_stop.load(); };

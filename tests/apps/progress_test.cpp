@@ -40,6 +40,16 @@ TEST_CASE("progress lines name the phase, the percentage and the time left, at m
   CHECK_THAT(all, Catch::EndsWith(" s (738 keypoints)\n"));
 }
 
+TEST_CASE("a time left the caller knows is printed as given, and as unknown when negative", "[apps]") {
+  // A resumed campaign is 90 % done at its start: the elapsed time scaled by the fraction would
+  // say seconds where the caller's rate of this call's work says hours.
+  std::ostringstream out;
+  Progress p("convergence", true, out, false, 0ms, 0ms);
+  p.update(0.9, 7200.0, "3 runs to make");
+  p.update(0.9, -1.0, "3 runs to make");
+  CHECK(out.str() == "convergence: 90 % (3 runs to make) ETA 2 h 00 min\nconvergence: 90 % (3 runs to make) ETA unknown\n");
+}
+
 TEST_CASE("a disabled or quick phase prints nothing", "[apps]") {
   std::ostringstream out;
   Progress quiet("deposition", false, out, false, 0ms, 0ms);

@@ -42,12 +42,15 @@ std::string Progress::formatDuration(double seconds) {
 }
 
 void Progress::update(double fraction, const std::string& detail) {
+  update(fraction, secondsLeft(std::clamp(fraction, 0.0, 1.0), std::chrono::duration<double>(Clock::now() - start_).count()), detail);
+}
+
+void Progress::update(double fraction, double left, const std::string& detail) {
   if (!enabled_ || finished_ || fraction >= 1.0) return;  // the end is finish()'s line
   const auto now = Clock::now();
   if (now - start_ < delay_ || now - last_ < interval_) return;
   last_ = now;
   fraction = std::clamp(fraction, 0.0, 1.0);
-  const double left = secondsLeft(fraction, std::chrono::duration<double>(now - start_).count());
   char percent[16];
   std::snprintf(percent, sizeof percent, "%.0f %%", 100.0 * fraction);
   std::string line = phase_ + ": " + percent;

@@ -26,6 +26,9 @@ class Progress {
 
   // Reports `fraction` (clamped to [0, 1]) done; `detail` is shown in brackets when not empty.
   void update(double fraction, const std::string& detail = "");
+  // The same with the time left known to the caller (seconds, negative: unknown), for phases whose
+  // fraction done is not all this call's work (runs resumed from checkpoints).
+  void update(double fraction, double seconds_left, const std::string& detail);
   // Ends the phase: prints the done line if anything was printed or the phase took longer than
   // `delay`.
   void finish(const std::string& detail = "");
