@@ -119,9 +119,10 @@ std::string SoilBinModel::name() const {
 
 namespace {
 
-void deposit(const study::Study& s, const DepositionProgress& on_deposit) {
+// Deposits the soil of `s`, its progress reported as that of the study named `reported_as`.
+void deposit(const study::Study& s, const std::string& reported_as, const DepositionProgress& on_deposit) {
   builtin::ensureSettledSoil(s, [&](double fraction, const std::string& stage_line) {
-    if (on_deposit) on_deposit(s.name, fraction, stage_line);
+    if (on_deposit) on_deposit(reported_as, fraction, stage_line);
   });
 }
 
@@ -139,7 +140,7 @@ void SoilBinModel::prepareSoil(const study::Study& s, const DepositionProgress& 
     if (packing_)
       relabelPacking(s, file, on_deposit);
     else
-      deposit(s, on_deposit);
+      deposit(s, s.name, on_deposit);
   }
   const std::string message = adapter::unsettledSoilMessage(file, adapter::readSettledSoil(file, s).settling);
   if (!message.empty() && !allow_unsettled_soil_) throw ArgumentError("study '" + s.name + "': " + message);
@@ -156,7 +157,9 @@ void SoilBinModel::relabelPacking(const study::Study& s, const std::filesystem::
     throw ArgumentError("shared soil packing: study '" + s.name + "' changes the bin, fill height or particle sizes of '" + reference.name +
                         "', whose deposition it would reuse");
   const auto reference_file = adapter::settledSoilFile(reference, dir);
-  if (!std::filesystem::exists(reference_file)) deposit(reference, on_deposit);
+  // Reported under the name of the study the packing is for: the packing study's own name is the
+  // same for every seed.
+  if (!std::filesystem::exists(reference_file)) deposit(reference, s.name, on_deposit);
   adapter::SettledSoil soil = adapter::readSettledSoil(reference_file, reference);
   soil.soil_hash = study::soilHash(s);
   for (auto& p : soil.particles) p.layer = builtin::layerAt(s.soil, p.x_m[1]);

@@ -11,6 +11,9 @@
 #include <catch2/catch.hpp>
 
 #include <cstdlib>
+#include <set>
+#include <string>
+#include <vector>
 
 using namespace demfem;
 
@@ -45,11 +48,34 @@ TEST_CASE("a soil-bin recording runs the study at the recording's depth and is s
   CHECK(again[0].simulated == residuals[0].simulated);
 }
 
+namespace {
+
+// Points the soil cache at `dir` for the test's lifetime.
+class SoilDirectory {
+ public:
+  explicit SoilDirectory(const std::filesystem::path& dir) : had_previous_(std::getenv("DEMFEM_SOIL_DIR") != nullptr) {
+    if (had_previous_) previous_ = std::getenv("DEMFEM_SOIL_DIR");
+    ::setenv("DEMFEM_SOIL_DIR", dir.c_str(), 1);
+  }
+  ~SoilDirectory() {
+    if (had_previous_)
+      ::setenv("DEMFEM_SOIL_DIR", previous_.c_str(), 1);
+    else
+      ::unsetenv("DEMFEM_SOIL_DIR");
+  }
+  SoilDirectory(const SoilDirectory&) = delete;
+  SoilDirectory& operator=(const SoilDirectory&) = delete;
+
+ private:
+  bool had_previous_;
+  std::string previous_;
+};
+
+}  // namespace
+
 TEST_CASE("the soil-bin model refuses an unsettled soil, naming the study, the file and the reason, unless allowed", "[campaign]") {
   const campaign::test::TempDir dir("unsettled");
-  const char* previous = std::getenv("DEMFEM_SOIL_DIR");
-  const std::string restore = previous ? previous : "";
-  ::setenv("DEMFEM_SOIL_DIR", (dir.path() / "soil").c_str(), 1);
+  const SoilDirectory soil_dir(dir.path() / "soil");
   const auto study = study::loadStudy(std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data/tiny_bin.json");
   // A soil whose last settling phase hit its time cap: a few grains on the floor.
   adapter::SettledSoil soil;
@@ -64,8 +90,33 @@ TEST_CASE("the soil-bin model refuses an unsettled soil, naming the study, the f
                     Catch::Contains("study '" + study.name + "'") && Catch::Contains(file.string()) &&
                         Catch::Contains("final settling phase hit its time cap") && Catch::Contains("--allow-unsettled-soil"));
   CHECK_NOTHROW(campaign::SoilBinModel(campaign::SoilForce::LoadCell, std::nullopt, true).prepare({study}, {}));
-  if (previous)
-    ::setenv("DEMFEM_SOIL_DIR", restore.c_str(), 1);
-  else
-    ::unsetenv("DEMFEM_SOIL_DIR");
+}
+
+TEST_CASE("a shared packing is deposited once per seed, reported under the name of the study it is for", "[campaign]") {
+  const campaign::test::TempDir dir("packing");
+  const SoilDirectory soil_dir(dir.path() / "soil");
+  const auto packing = study::loadStudy(std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data/tiny_bin.json");
+  // Two studies at seed 7 that differ from the packing study in their step only: the packing's
+  // deposition at seed 7, made once, serves both (as the convergence bench's fractions share it).
+  std::vector<study::Study> studies(2, packing);
+  for (int i = 0; i < 2; ++i) {
+    studies[i].name = "tiny_bin_step" + std::to_string(i) + "_seed7";
+    studies[i].soil.deposition_seed = 7;
+    studies[i].dem.dt_fraction = packing.dem.dt_fraction / (i + 2);
+  }
+  std::set<std::string> reported;
+  campaign::SoilBinModel(campaign::SoilForce::LoadCell, packing).prepare(studies, [&](const std::string& name, double, const std::string&) {
+    reported.insert(name);
+  });
+  // One deposition (a second would be reported under the second study's name), named for the study
+  // that needed it: not the packing study's name, the same for every seed.
+  CHECK(reported == std::set<std::string>{studies[0].name});
+  // Both relabelled soils hold the one packing, each under its own study's hash.
+  const auto first = adapter::readSettledSoil(adapter::settledSoilFile(studies[0], dir.path() / "soil"), studies[0]);
+  const auto second = adapter::readSettledSoil(adapter::settledSoilFile(studies[1], dir.path() / "soil"), studies[1]);
+  CHECK(first.soil_hash == study::soilHash(studies[0]));
+  CHECK(second.soil_hash == study::soilHash(studies[1]));
+  REQUIRE(first.particles.size() == second.particles.size());
+  REQUIRE(!first.particles.empty());
+  for (std::size_t i = 0; i < first.particles.size(); ++i) CHECK(first.particles[i].x_m == second.particles[i].x_m);
 }
