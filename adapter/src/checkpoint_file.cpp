@@ -77,8 +77,8 @@ void writeCheckpointFile(const std::filesystem::path& file, const std::string& k
   }
 }
 
-std::string readCheckpointFile(const std::filesystem::path& file, const std::string& kind) {
-  const std::string what = "checkpoint " + file.string();
+std::string readCheckpointFile(const std::filesystem::path& file, const std::string& kind, const std::string& description) {
+  const std::string what = description + " " + file.string();
   std::error_code error;
   const auto bytes = std::filesystem::file_size(file, error);
   if (error) invalid(what, "cannot be read");

@@ -3,6 +3,7 @@
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
 #include "demfem/fem/coupled_driver.hpp"
+#include "demfem/fem/reduction_cache.hpp"
 #include "demfem/protocol/transport.hpp"
 #include "demfem/study/study.hpp"
 
@@ -77,6 +78,7 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
   options.stop_requested = [] { return g_stop_signal != 0; };
   Progress reduction("keypoint reduction", !o.quiet);
   options.on_reduction_progress = [&reduction](double fraction) { reduction.update(fraction); };
+  options.reduction_cache_dir = fem::defaultReductionDirectory();
   std::optional<Progress> coupled;  // started once the model is built
   options.on_progress = [&coupled](const fem::CoupledProgress& p) {
     char detail[96];

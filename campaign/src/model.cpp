@@ -6,6 +6,7 @@
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/campaign/parameters.hpp"
 #include "demfem/fem/coupled_driver.hpp"
+#include "demfem/fem/reduction_cache.hpp"
 #include "demfem/study/tool_motion.hpp"
 
 #include <cmath>
@@ -62,6 +63,7 @@ namespace {
 analysis::Recording loadCellRun(const study::Study& study, const std::filesystem::path& scratch) {
   fem::CoupledRunOptions options;
   options.output_dir = scratch;
+  options.reduction_cache_dir = fem::defaultReductionDirectory();
   fem::CoupledDriver driver(study, options);
   const std::unique_ptr<adapter::CouplingApi> dem = builtin::makeBackend(study);
   driver.run(*dem);

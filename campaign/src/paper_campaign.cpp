@@ -10,6 +10,7 @@
 #include "demfem/campaign/calibration.hpp"
 #include "demfem/campaign/parameters.hpp"
 #include "demfem/fem/coupled_driver.hpp"
+#include "demfem/fem/reduction_cache.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -128,6 +129,7 @@ class Runner {
     if (c.status.state == CaseState::Done) return;
     fem::CoupledRunOptions run;
     run.output_dir = c.status.run_dir;
+    run.reduction_cache_dir = fem::defaultReductionDirectory();
     run.checkpoint_every = o_.checkpoint_every;
     run.max_steps = o_.max_steps;
     run.stop_requested = [this] { return stopping(); };

@@ -19,6 +19,7 @@
 
 #include "demfem/fem/modal.hpp"
 #include "demfem/fem/model.hpp"
+#include "demfem/fem/reduction_cache.hpp"
 #include "demfem/fem/sensors.hpp"
 #include "demfem/fem/weight_drop.hpp"
 
@@ -244,7 +245,7 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
   const std::string tool_key = reductionKey(tool);
   const auto& clamp = tool.constraints.clamp_rotational_stiffness_Nm_per_rad;
   const auto reduction = impl_->reductions.get(tool_key, [&] {
-    return Reduction{fem::reduce(fem::buildFullModel(tool)), tool.fem.youngs_Pa, clamp.value_or(0.0)};
+    return Reduction{fem::reduceCached(fem::buildFullModel(tool), fem::defaultReductionDirectory()), tool.fem.youngs_Pa, clamp.value_or(0.0)};
   });
   const std::string weight_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
   std::shared_ptr<const Basis> basis;

@@ -4,6 +4,7 @@
 #include "demfem/adapter/tool_drive.hpp"
 #include "demfem/fem/modal.hpp"
 #include "demfem/fem/model.hpp"
+#include "demfem/fem/reduction_cache.hpp"
 #include "demfem/fem/sensors.hpp"
 #include "demfem/study/tool_motion.hpp"
 #include "demfem/vtkio/vtk_files.hpp"
@@ -205,7 +206,10 @@ struct CoupledDriver::Impl {
   }
 
   void buildFem() {
-    model_ = std::make_unique<ReducedModel>(reduce(buildFullModel(tool_), options_.on_reduction_progress));
+    const FullModel full = buildFullModel(tool_);
+    model_ = std::make_unique<ReducedModel>(options_.reduction_cache_dir
+                                                ? reduceCached(full, *options_.reduction_cache_dir, options_.on_reduction_progress)
+                                                : reduce(full, options_.on_reduction_progress));
     if (rigid_) {
       load_cell_influence_ = loadCellInfluence(*model_);
       return;

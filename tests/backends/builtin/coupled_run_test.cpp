@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 using namespace demfem;
@@ -119,4 +120,28 @@ TEST_CASE("a coupled run on the builtin DEM refuses an output directory another 
   std::vector<std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(dir / "out")) files.push_back(e.path().filename().string());
   CHECK(files == std::vector<std::string>{adapter::DirectoryLock::kFileName});
+}
+
+TEST_CASE("a coupled run on the builtin DEM writes the same bytes whether its tool was reduced or read from the reduction cache",
+          "[builtin][fem]") {
+  const fs::path dir = support::freshDir("builtin-coupled-reduction-cache");
+  const auto run = [&](const std::string& name, std::optional<fs::path> cache) {
+    const study::Study study = smallCoupledStudy(dir / name);
+    auto backend = builtin::makeBackend(study);
+    fem::CoupledRunOptions options;
+    options.output_dir = dir / name;
+    options.reduction_cache_dir = std::move(cache);
+    REQUIRE(fem::CoupledDriver(study, options).run(*backend).complete);
+    return support::readText(dir / name / "sensors.csv") + support::readText(dir / name / "keypoint_displacements.f64");
+  };
+  const std::string reduced = run("reduced", std::nullopt);
+  const std::string written = run("written", dir / "cache");  // reduced, then written to the cache
+  const std::string read = run("read", dir / "cache");
+  REQUIRE(reduced.size() > 1000);
+  CHECK(written == reduced);
+  CHECK(read == reduced);
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(dir / "cache")) files += e.path().filename().string().rfind("reduction-", 0) == 0;
+  CHECK(files == 1);
+  fs::remove_all(dir);
 }

@@ -44,7 +44,8 @@ std::string checkpointImage(const std::string& kind, const std::string& payload)
 std::string checkpointPayload(const std::string& image, const std::string& kind, const std::string& what);
 
 void writeCheckpointFile(const std::filesystem::path& file, const std::string& kind, const std::string& payload);
-std::string readCheckpointFile(const std::filesystem::path& file, const std::string& kind);
+// `description` names the file's role in messages ("checkpoint FILE: ...").
+std::string readCheckpointFile(const std::filesystem::path& file, const std::string& kind, const std::string& description = "checkpoint");
 
 // Appends trivially copyable values and vectors (u64 length, then the elements) to a byte string.
 class PayloadWriter {

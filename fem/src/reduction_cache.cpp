@@ -1,0 +1,147 @@
+#include "demfem/fem/reduction_cache.hpp"
+
+#include "demfem/adapter/checkpoint_file.hpp"
+#include "demfem/adapter/output_files.hpp"
+#include "demfem/study/study.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <vector>
+
+namespace demfem::fem {
+
+namespace {
+
+constexpr const char* kKind = "fem-reduction";
+
+template <class T> void append(std::string& bytes, const T* values, std::size_t count) {
+  bytes.append(reinterpret_cast<const char*>(values), count * sizeof(T));
+}
+
+void appendSparse(std::string& bytes, const SparseMatrix& m) {
+  SparseMatrix compressed = m;
+  compressed.makeCompressed();
+  const std::int64_t shape[3] = {compressed.rows(), compressed.cols(), compressed.nonZeros()};
+  append(bytes, shape, 3);
+  append(bytes, compressed.outerIndexPtr(), static_cast<std::size_t>(compressed.cols()) + 1);
+  append(bytes, compressed.innerIndexPtr(), static_cast<std::size_t>(compressed.nonZeros()));
+  append(bytes, compressed.valuePtr(), static_cast<std::size_t>(compressed.nonZeros()));
+}
+
+void appendInts(std::string& bytes, const std::vector<int>& values) {
+  const std::uint64_t n = values.size();
+  append(bytes, &n, 1);
+  append(bytes, values.data(), values.size());
+}
+
+// The lower triangle of a symmetric matrix, column by column (reduce() makes K and M exactly
+// symmetric, so the upper one carries nothing).
+std::vector<double> lowerTriangle(const Eigen::MatrixXd& m) {
+  std::vector<double> values;
+  values.reserve(static_cast<std::size_t>(m.rows() * (m.rows() + 1) / 2));
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index r = c; r < m.rows(); ++r) values.push_back(m(r, c));
+  return values;
+}
+
+Eigen::MatrixXd symmetricFromLower(const std::vector<double>& values, Eigen::Index n) {
+  Eigen::MatrixXd m(n, n);
+  std::size_t k = 0;
+  for (Eigen::Index c = 0; c < n; ++c)
+    for (Eigen::Index r = c; r < n; ++r) m(r, c) = m(c, r) = values[k++];
+  return m;
+}
+
+std::string payloadOf(const ReducedModel& r, const std::string& hash) {
+  adapter::PayloadWriter out;
+  out.putString(hash);
+  out.put(static_cast<std::uint64_t>(r.dofCount()));
+  out.putVector(std::vector<double>(r.keypoints.data(), r.keypoints.data() + r.keypoints.size()));
+  out.put(r.length_m);
+  out.putVector(r.constraints.fixed_dofs);
+  out.putVector(r.constraints.load_cell_dofs);
+  std::vector<int> spring_dofs;
+  std::vector<double> spring_stiffness;
+  for (const auto& [dof, k] : r.constraints.springs) spring_dofs.push_back(dof), spring_stiffness.push_back(k);
+  out.putVector(spring_dofs);
+  out.putVector(spring_stiffness);
+  out.putVector(lowerTriangle(r.K));
+  out.putVector(lowerTriangle(r.M));
+  return out.bytes();
+}
+
+ReducedModel parse(const std::string& payload, const std::string& hash, const std::string& what) {
+  adapter::PayloadReader in(payload, what);
+  if (const std::string recorded = in.getString(); recorded != hash)
+    in.fail("records the model hash " + recorded + ", not its name's " + hash);
+  const auto n = in.get<std::uint64_t>();
+  ReducedModel r;
+  const auto keypoints = in.getVector<double>();
+  if (keypoints.size() != n) in.fail(std::to_string(keypoints.size()) + " keypoint coordinates for " + std::to_string(n) + " DOFs");
+  r.keypoints.resize(static_cast<Eigen::Index>(n / 3), 3);
+  std::copy(keypoints.begin(), keypoints.end(), r.keypoints.data());
+  in.get(r.length_m);
+  in.getVector(r.constraints.fixed_dofs);
+  in.getVector(r.constraints.load_cell_dofs);
+  const auto spring_dofs = in.getVector<int>();
+  const auto spring_stiffness = in.getVector<double>();
+  if (spring_dofs.size() != spring_stiffness.size()) in.fail("spring DOFs and stiffnesses differ in number");
+  for (std::size_t i = 0; i < spring_dofs.size(); ++i) r.constraints.springs.emplace_back(spring_dofs[i], spring_stiffness[i]);
+  const auto K = in.getVector<double>();
+  const auto M = in.getVector<double>();
+  in.finish();
+  if (K.size() != n * (n + 1) / 2 || M.size() != K.size()) in.fail("K and M are not the lower triangles of " + std::to_string(n) + " DOFs");
+  r.K = symmetricFromLower(K, static_cast<Eigen::Index>(n));
+  r.M = symmetricFromLower(M, static_cast<Eigen::Index>(n));
+  return r;
+}
+
+}  // namespace
+
+std::string fullModelHash(const FullModel& model) {
+  std::string bytes = "demfem-reduction-v" + std::to_string(kReductionVersion) + '\n';
+  appendSparse(bytes, model.K);
+  appendSparse(bytes, model.M);
+  appendInts(bytes, model.keypoint_nodes);
+  append(bytes, model.keypoints.data(), static_cast<std::size_t>(model.keypoints.size()));
+  appendInts(bytes, model.constraints.fixed_dofs);
+  appendInts(bytes, model.constraints.load_cell_dofs);
+  for (const auto& [dof, k] : model.constraints.springs) append(bytes, &dof, 1), append(bytes, &k, 1);
+  append(bytes, &model.length_m, 1);
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(study::fnv1a64(bytes)));
+  return hex;
+}
+
+std::filesystem::path reductionFile(const FullModel& model, const std::filesystem::path& dir) {
+  return dir / ("reduction-" + fullModelHash(model) + ".bin");
+}
+
+ReducedModel reduceCached(const FullModel& model, const std::filesystem::path& dir, const std::function<void(double)>& progress) {
+  const std::string hash = fullModelHash(model);
+  const auto file = dir / ("reduction-" + hash + ".bin");
+  if (std::filesystem::exists(file)) {
+    const std::string what = "keypoint reduction cache " + file.string();
+    try {
+      ReducedModel r = parse(adapter::readCheckpointFile(file, kKind, "keypoint reduction cache"), hash, what);
+      if (progress) progress(1.0);
+      return r;
+    } catch (const adapter::CouplingError& e) {
+      throw std::runtime_error(std::string(e.what()) + "; delete the file and the next run reduces the tool again");
+    }
+  }
+  ReducedModel r = reduce(model, progress);
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error) throw adapter::OutputError("cannot create the keypoint reduction cache " + dir.string() + ": " + error.message());
+  adapter::writeFileAtomically(file, adapter::checkpointImage(kKind, payloadOf(r, hash)));
+  return r;
+}
+
+std::filesystem::path defaultReductionDirectory() {
+  if (const char* env = std::getenv("DEMFEM_FEM_CACHE_DIR"); env && *env) return env;
+  return "fem-cache";
+}
+
+}  // namespace demfem::fem
