@@ -76,7 +76,7 @@ void runCoupledCommand(const RunOptions& o, const std::string& json_target) {
   options.checkpoint_every = o.checkpoint_every;
   options.resume = o.resume;
   options.stop_requested = [] { return g_stop_signal != 0; };
-  Progress reduction("keypoint reduction", !o.quiet);
+  Progress reduction("FEM model (keypoint reduction, integrator set-up)", !o.quiet);
   options.on_reduction_progress = [&reduction](double fraction) { reduction.update(fraction); };
   options.reduction_cache_dir = fem::defaultReductionDirectory();
   std::optional<Progress> coupled;  // started once the model is built
