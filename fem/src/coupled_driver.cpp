@@ -214,7 +214,10 @@ struct CoupledDriver::Impl {
       load_cell_influence_ = loadCellInfluence(*model_);
       return;
     }
-    integrator_ = makeIntegrator(*model_, dt_, RayleighDamping{tool_.fem.alpha_s, tool_.fem.beta_per_s}, study_.fem.integration);
+    std::function<ModalBasis()> modal_basis;  // computed by the integrator unless cached
+    if (options_.reduction_cache_dir)
+      modal_basis = [&] { return modalBasisCached(full, *model_, dt_, *options_.reduction_cache_dir); };
+    integrator_ = makeIntegrator(*model_, dt_, RayleighDamping{tool_.fem.alpha_s, tool_.fem.beta_per_s}, study_.fem.integration, modal_basis);
     sensors_ = std::make_unique<Sensors>(*model_, tool_);
   }
 

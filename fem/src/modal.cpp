@@ -95,25 +95,46 @@ void addColumns(const Eigen::MatrixXd& A, const std::vector<Eigen::Index>& colum
 
 }  // namespace
 
-ModalIntegrator::ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping, double max_omega_dt)
-    : dofs_(model.dofCount()), free_(model.freeDofs()), cell_(model.constraints.load_cell_dofs) {
+ModalBasis modalBasis(const ReducedModel& model, double dt_s, double max_omega_dt) {
   if (!(dt_s > 0)) throw std::invalid_argument("modal integrator: dt must be > 0 s (got " + std::to_string(dt_s) + ")");
-  const Eigen::MatrixXd K_ff = model.K(free_, free_);
+  const std::vector<int> free = model.freeDofs();
+  const Eigen::MatrixXd K_ff = model.K(free, free);
   Eigen::LLT<Eigen::MatrixXd> K_factor(K_ff);
   if (K_factor.info() != Eigen::Success)
     throw std::invalid_argument("modal integrator: K is not positive definite on the free DOFs (tool not held?)");
   if (!(max_omega_dt > 0)) throw std::invalid_argument("modal integrator: the resolved w dt must be > 0");
   const Modes modes = resolvedModes(model, dt_s, max_omega_dt);
-  highest_mode_Hz_ = modes.frequencies_Hz.back();
-  phi_ = modes.shapes(free_, Eigen::all);
-  phi_t_ = phi_.transpose();
-  Eigen::ArrayXd omega2(phi_.cols());
-  for (Eigen::Index j = 0; j < omega2.size(); ++j)
-    omega2(j) = std::pow(2 * std::numbers::pi * modes.frequencies_Hz[static_cast<std::size_t>(j)], 2);
+  ModalBasis b;
+  b.highest_mode_Hz = modes.frequencies_Hz.back();
+  b.phi = modes.shapes(free, Eigen::all);
+  b.omega2.resize(b.phi.cols());
+  for (Eigen::Index j = 0; j < b.omega2.size(); ++j)
+    b.omega2(j) = std::pow(2 * std::numbers::pi * modes.frequencies_Hz[static_cast<std::size_t>(j)], 2);
   // Residual flexibility of the modes left out: R = K_ff^-1 - Phi W^-2 Phi^T.
-  residual_ = K_factor.solve(Eigen::MatrixXd::Identity(K_ff.rows(), K_ff.cols()));
-  residual_ -= phi_ * omega2.inverse().matrix().asDiagonal() * phi_t_;
-  residual_ = 0.5 * (residual_ + residual_.transpose()).eval();
+  b.residual = K_factor.solve(Eigen::MatrixXd::Identity(K_ff.rows(), K_ff.cols()));
+  const Eigen::MatrixXd phi_t = b.phi.transpose();
+  b.residual -= b.phi * b.omega2.inverse().matrix().asDiagonal() * phi_t;
+  b.residual = 0.5 * (b.residual + b.residual.transpose()).eval();
+  return b;
+}
+
+ModalIntegrator::ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping, double max_omega_dt)
+    : ModalIntegrator(model, modalBasis(model, dt_s, max_omega_dt), dt_s, damping) {}
+
+ModalIntegrator::ModalIntegrator(const ReducedModel& model, ModalBasis basis, double dt_s, RayleighDamping damping)
+    : dofs_(model.dofCount()), free_(model.freeDofs()), cell_(model.constraints.load_cell_dofs) {
+  if (!(dt_s > 0)) throw std::invalid_argument("modal integrator: dt must be > 0 s (got " + std::to_string(dt_s) + ")");
+  const auto free_count = static_cast<Eigen::Index>(free_.size());
+  if (basis.phi.rows() != free_count || basis.phi.cols() < 1 || basis.omega2.size() != basis.phi.cols() ||
+      basis.residual.rows() != free_count || basis.residual.cols() != free_count)
+    throw std::invalid_argument("modal integrator: the modal basis (" + std::to_string(basis.phi.rows()) + " x " +
+                                std::to_string(basis.phi.cols()) + " modes, R " + std::to_string(basis.residual.rows()) +
+                                " DOFs) does not fit the model's " + std::to_string(free_count) + " free DOFs");
+  highest_mode_Hz_ = basis.highest_mode_Hz;
+  phi_ = std::move(basis.phi);
+  phi_t_ = phi_.transpose();
+  const Eigen::ArrayXd omega2 = std::move(basis.omega2);
+  residual_ = std::move(basis.residual);
   const Eigen::MatrixXd K_cf = model.K(cell_, free_), M_cf = model.M(cell_, free_);
   cell_stiffness_ = K_cf;
   const ThreeLevelTerms<Eigen::MatrixXd> cell_terms = threeLevelTerms(M_cf, K_cf, damping, dt_s);  // Eq (6)-(8), load-cell rows
@@ -226,12 +247,12 @@ void ModalIntegrator::restore(const SavedIntegratorState& saved) {
 }
 
 std::unique_ptr<TimeIntegrator> makeIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping,
-                                               study::FemIntegration integration) {
+                                               study::FemIntegration integration, const std::function<ModalBasis()>& modal_basis) {
   switch (integration) {
     case study::FemIntegration::Full:
       return std::make_unique<ThreeLevelIntegrator>(model, dt_s, damping);
     case study::FemIntegration::Modal:
-      return std::make_unique<ModalIntegrator>(model, dt_s, damping);
+      return std::make_unique<ModalIntegrator>(model, modal_basis ? modal_basis() : modalBasis(model, dt_s), dt_s, damping);
   }
   throw std::invalid_argument("unknown FEM integration");
 }

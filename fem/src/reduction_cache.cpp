@@ -13,7 +13,8 @@ namespace demfem::fem {
 
 namespace {
 
-constexpr const char* kKind = "fem-reduction";
+constexpr const char* kReductionKind = "fem-reduction";
+constexpr const char* kModalKind = "fem-modal-basis";
 
 template <class T> void append(std::string& bytes, const T* values, std::size_t count) {
   bytes.append(reinterpret_cast<const char*>(values), count * sizeof(T));
@@ -71,7 +72,7 @@ std::string payloadOf(const ReducedModel& r, const std::string& hash) {
   return out.bytes();
 }
 
-ReducedModel parse(const std::string& payload, const std::string& hash, const std::string& what) {
+ReducedModel parseReduction(const std::string& payload, const std::string& hash, const std::string& what) {
   adapter::PayloadReader in(payload, what);
   if (const std::string recorded = in.getString(); recorded != hash)
     in.fail("records the model hash " + recorded + ", not its name's " + hash);
@@ -97,10 +98,66 @@ ReducedModel parse(const std::string& payload, const std::string& hash, const st
   return r;
 }
 
+std::string hexOf(std::uint64_t value) {
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(value));
+  return hex;
+}
+
+// The value kept in `file` (container kind `kind`, payload read by `parse`), else `compute()`
+// written there by `payload` (reduction_cache.hpp, contract).
+template <class Parse, class Compute, class Payload>
+auto cachedValue(const std::filesystem::path& file, const char* kind, const std::string& description, Parse parse, Compute compute,
+                 Payload payload) -> decltype(compute()) {
+  if (std::filesystem::exists(file)) {
+    try {
+      return parse(adapter::readCheckpointFile(file, kind, description), description + " " + file.string());
+    } catch (const adapter::CouplingError& e) {
+      throw std::runtime_error(std::string(e.what()) + "; delete the file and the next run computes it again");
+    }
+  }
+  auto value = compute();
+  std::error_code error;
+  std::filesystem::create_directories(file.parent_path(), error);
+  if (error) throw adapter::OutputError("cannot create the FEM cache directory " + file.parent_path().string() + ": " + error.message());
+  adapter::writeFileAtomically(file, adapter::checkpointImage(kind, payload(value)));
+  return value;
+}
+
+std::string modalPayload(const ModalBasis& b, const std::string& hash) {
+  adapter::PayloadWriter out;
+  out.putString(hash);
+  out.put(static_cast<std::uint64_t>(b.phi.rows()));
+  out.put(b.highest_mode_Hz);
+  out.putVector(std::vector<double>(b.omega2.data(), b.omega2.data() + b.omega2.size()));
+  out.putVector(std::vector<double>(b.phi.data(), b.phi.data() + b.phi.size()));
+  out.putVector(lowerTriangle(b.residual));
+  return out.bytes();
+}
+
+ModalBasis parseModal(const std::string& payload, const std::string& hash, const std::string& what) {
+  adapter::PayloadReader in(payload, what);
+  if (const std::string recorded = in.getString(); recorded != hash)
+    in.fail("records the hash " + recorded + ", not its name's " + hash);
+  const auto free = in.get<std::uint64_t>();
+  ModalBasis b;
+  in.get(b.highest_mode_Hz);
+  const auto omega2 = in.getVector<double>();
+  const auto phi = in.getVector<double>();
+  const auto residual = in.getVector<double>();
+  in.finish();
+  if (omega2.empty() || phi.size() != free * omega2.size() || residual.size() != free * (free + 1) / 2)
+    in.fail("its modes and R do not fit " + std::to_string(free) + " free DOFs");
+  b.omega2 = Eigen::Map<const Eigen::ArrayXd>(omega2.data(), static_cast<Eigen::Index>(omega2.size()));
+  b.phi = Eigen::Map<const Eigen::MatrixXd>(phi.data(), static_cast<Eigen::Index>(free), static_cast<Eigen::Index>(omega2.size()));
+  b.residual = symmetricFromLower(residual, static_cast<Eigen::Index>(free));
+  return b;
+}
+
 }  // namespace
 
 std::string fullModelHash(const FullModel& model) {
-  std::string bytes = "demfem-reduction-v" + std::to_string(kReductionVersion) + '\n';
+  std::string bytes = "demfem-reduction-v" + std::to_string(kFemCacheVersion) + '\n';
   appendSparse(bytes, model.K);
   appendSparse(bytes, model.M);
   appendInts(bytes, model.keypoint_nodes);
@@ -109,9 +166,7 @@ std::string fullModelHash(const FullModel& model) {
   appendInts(bytes, model.constraints.load_cell_dofs);
   for (const auto& [dof, k] : model.constraints.springs) append(bytes, &dof, 1), append(bytes, &k, 1);
   append(bytes, &model.length_m, 1);
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(study::fnv1a64(bytes)));
-  return hex;
+  return hexOf(study::fnv1a64(bytes));
 }
 
 std::filesystem::path reductionFile(const FullModel& model, const std::filesystem::path& dir) {
@@ -120,23 +175,25 @@ std::filesystem::path reductionFile(const FullModel& model, const std::filesyste
 
 ReducedModel reduceCached(const FullModel& model, const std::filesystem::path& dir, const std::function<void(double)>& progress) {
   const std::string hash = fullModelHash(model);
-  const auto file = dir / ("reduction-" + hash + ".bin");
-  if (std::filesystem::exists(file)) {
-    const std::string what = "keypoint reduction cache " + file.string();
-    try {
-      ReducedModel r = parse(adapter::readCheckpointFile(file, kKind, "keypoint reduction cache"), hash, what);
-      if (progress) progress(1.0);
-      return r;
-    } catch (const adapter::CouplingError& e) {
-      throw std::runtime_error(std::string(e.what()) + "; delete the file and the next run reduces the tool again");
-    }
-  }
-  ReducedModel r = reduce(model, progress);
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (error) throw adapter::OutputError("cannot create the keypoint reduction cache " + dir.string() + ": " + error.message());
-  adapter::writeFileAtomically(file, adapter::checkpointImage(kKind, payloadOf(r, hash)));
-  return r;
+  return cachedValue(
+      dir / ("reduction-" + hash + ".bin"), kReductionKind, "keypoint reduction cache",
+      [&](const std::string& payload, const std::string& what) {
+        ReducedModel r = parseReduction(payload, hash, what);
+        if (progress) progress(1.0);
+        return r;
+      },
+      [&] { return reduce(model, progress); }, [&](const ReducedModel& r) { return payloadOf(r, hash); });
+}
+
+ModalBasis modalBasisCached(const FullModel& full, const ReducedModel& reduced, double dt_s, const std::filesystem::path& dir) {
+  const double truncation = kQuasiStaticOmegaDt;
+  std::string key = fullModelHash(full);
+  key.append(reinterpret_cast<const char*>(&dt_s), sizeof dt_s).append(reinterpret_cast<const char*>(&truncation), sizeof truncation);
+  const std::string hash = hexOf(study::fnv1a64(key));
+  return cachedValue(
+      dir / ("modal-" + hash + ".bin"), kModalKind, "modal basis cache",
+      [&](const std::string& payload, const std::string& what) { return parseModal(payload, hash, what); },
+      [&] { return modalBasis(reduced, dt_s, truncation); }, [&](const ModalBasis& b) { return modalPayload(b, hash); });
 }
 
 std::filesystem::path defaultReductionDirectory() {

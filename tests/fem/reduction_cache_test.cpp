@@ -111,3 +111,39 @@ TEST_CASE("the reduction cache's directory is $DEMFEM_FEM_CACHE_DIR, else fem-ca
   CHECK(defaultReductionDirectory() == "fem-cache");
   if (previous) ::setenv("DEMFEM_FEM_CACHE_DIR", restore.c_str(), 1);
 }
+
+TEST_CASE("a cached modal basis is modalBasis()'s bit for bit, one file per model and step", "[fem]") {
+  const support::TempDir dir("modal-basis-cache");
+  const FullModel full = buildPlateModel(testing::smallStrip());
+  const ReducedModel reduced = reduce(full);
+  const double dt_s = 1e-3;
+  const ModalBasis direct = modalBasis(reduced, dt_s);
+  for (int pass = 0; pass < 2; ++pass) {  // written, then read
+    INFO("pass " << pass);
+    const ModalBasis cached = modalBasisCached(full, reduced, dt_s, dir.path());
+    CHECK((cached.omega2 == direct.omega2).all());
+    CHECK(cached.phi == direct.phi);
+    CHECK(cached.residual == direct.residual);
+    CHECK(cached.highest_mode_Hz == direct.highest_mode_Hz);
+  }
+  modalBasisCached(full, reduced, dt_s / 2, dir.path());  // another step: another basis
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) files.push_back(e.path());
+  REQUIRE(files.size() == 2);
+  for (const auto& file : files) CHECK(file.filename().string().rfind("modal-", 0) == 0);
+
+  std::filesystem::resize_file(files[0], std::filesystem::file_size(files[0]) - 8);
+  const auto damaged = [&] {
+    modalBasisCached(full, reduced, dt_s, dir.path());
+    modalBasisCached(full, reduced, dt_s / 2, dir.path());
+  };
+  CHECK_THROWS_WITH(damaged(), Catch::Contains("modal basis cache " + files[0].string()) && Catch::Contains("delete the file"));
+}
+
+TEST_CASE("a modal integrator refuses a basis that does not fit its model", "[fem]") {
+  const ReducedModel strip = reduce(buildPlateModel(testing::smallStrip()));
+  study::Tool longer = testing::smallStrip();
+  support::usePlate(longer, 0.120, 0.010, 0.004);
+  const ModalBasis other = modalBasis(reduce(buildPlateModel(longer)), 1e-3);
+  CHECK_THROWS_WITH(ModalIntegrator(strip, other, 1e-3, RayleighDamping{0.55e-3, 0}), Catch::Contains("does not fit the model's"));
+}

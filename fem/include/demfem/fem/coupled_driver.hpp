@@ -81,8 +81,8 @@ struct CoupledRunOptions {
   double keypoint_tolerance_m = 1e-6;
   std::function<void(const CoupledProgress&)> on_progress;  // after every step
   std::function<void(double)> on_reduction_progress;        // keypoint reduction, fraction done (reduce())
-  // Keypoint reductions read from and written to this directory (reduction_cache.hpp); none: the
-  // tool is reduced on every run. The run's numbers are the same either way.
+  // Keypoint reductions and modal bases read from and written to this directory
+  // (reduction_cache.hpp); none: computed on every run. The run's numbers are the same either way.
   std::optional<std::filesystem::path> reduction_cache_dir;
   std::function<bool()> stop_requested;                     // checked before every step
 };

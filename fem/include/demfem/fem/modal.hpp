@@ -38,6 +38,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -75,12 +76,28 @@ class ModalRecursion {
   Eigen::MatrixXd stiffness_, l1_, l2_, l3_;
 };
 
+// The part of ModalIntegrator's set-up that depends on the model and the step alone (not on the
+// damping): the modes it integrates, w dt <= max_omega_dt (Spectra; at least one), and the residual
+// flexibility R = K_ff^-1 - Phi W^-2 Phi^T of the others (dense Cholesky of K_ff), on the free DOFs.
+// Seconds of processor time on the paper's tools; fem/reduction_cache.hpp keeps it on disk.
+struct ModalBasis {
+  Eigen::ArrayXd omega2;     // w_j^2 ((rad/s)^2) per mode, ascending
+  Eigen::MatrixXd phi;       // free DOFs x modes, M-normalized
+  Eigen::MatrixXd residual;  // R, free x free, symmetric
+  double highest_mode_Hz = 0;
+};
+
+// Throws std::invalid_argument for dt <= 0, max_omega_dt <= 0 or a model whose K is not positive
+// definite on the free DOFs.
+ModalBasis modalBasis(const ReducedModel& model, double dt_s, double max_omega_dt = kQuasiStaticOmegaDt);
+
 class ModalIntegrator : public TimeIntegrator {
  public:
-  // Computes the modes of `model` (Spectra) up to w dt = max_omega_dt and the residual flexibility
-  // (dense Cholesky of K_ff). Throws std::invalid_argument for dt <= 0, negative damping
-  // or a model whose K is not positive definite on the free DOFs; at least one mode is kept.
+  // With modalBasis(model, dt_s, max_omega_dt). Throws as modalBasis() and for negative damping.
   ModalIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping, double max_omega_dt = kQuasiStaticOmegaDt);
+  // With a basis modalBasis(model, dt_s, ...) returned (or the reduction cache read back). Throws
+  // std::invalid_argument for dt <= 0, negative damping or a basis whose sizes do not fit the model.
+  ModalIntegrator(const ReducedModel& model, ModalBasis basis, double dt_s, RayleighDamping damping);
 
   void start(const Eigen::VectorXd& f0) override;
   const Eigen::VectorXd& step(const Eigen::VectorXd& applied_next) override;
@@ -160,8 +177,10 @@ class SpringRitzBasis {
 };
 
 // The integrator a study asks for (study fem.integration): Full -> ThreeLevelIntegrator,
-// Modal -> ModalIntegrator.
+// Modal -> ModalIntegrator on the basis `modal_basis` returns (modalBasis(model, dt_s) when empty;
+// not called for Full).
 std::unique_ptr<TimeIntegrator> makeIntegrator(const ReducedModel& model, double dt_s, RayleighDamping damping,
-                                               study::FemIntegration integration);
+                                               study::FemIntegration integration,
+                                               const std::function<ModalBasis()>& modal_basis = {});
 
 }  // namespace demfem::fem
