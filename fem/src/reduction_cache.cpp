@@ -54,9 +54,7 @@ Eigen::MatrixXd symmetricFromLower(const std::vector<double>& values, Eigen::Ind
   return m;
 }
 
-std::string payloadOf(const ReducedModel& r, const std::string& hash) {
-  adapter::PayloadWriter out;
-  out.putString(hash);
+void writeReduction(const ReducedModel& r, adapter::PayloadWriter& out) {
   out.put(static_cast<std::uint64_t>(r.dofCount()));
   out.putVector(std::vector<double>(r.keypoints.data(), r.keypoints.data() + r.keypoints.size()));
   out.put(r.length_m);
@@ -69,13 +67,9 @@ std::string payloadOf(const ReducedModel& r, const std::string& hash) {
   out.putVector(spring_stiffness);
   out.putVector(lowerTriangle(r.K));
   out.putVector(lowerTriangle(r.M));
-  return out.bytes();
 }
 
-ReducedModel parseReduction(const std::string& payload, const std::string& hash, const std::string& what) {
-  adapter::PayloadReader in(payload, what);
-  if (const std::string recorded = in.getString(); recorded != hash)
-    in.fail("records the model hash " + recorded + ", not its name's " + hash);
+ReducedModel readReduction(adapter::PayloadReader& in) {
   const auto n = in.get<std::uint64_t>();
   ReducedModel r;
   const auto keypoints = in.getVector<double>();
@@ -104,41 +98,43 @@ std::string hexOf(std::uint64_t value) {
   return hex;
 }
 
-// The value kept in `file` (container kind `kind`, payload read by `parse`), else `compute()`
-// written there by `payload` (reduction_cache.hpp, contract).
-template <class Parse, class Compute, class Payload>
-auto cachedValue(const std::filesystem::path& file, const char* kind, const std::string& description, Parse parse, Compute compute,
-                 Payload payload) -> decltype(compute()) {
+// The value kept in dir/<prefix>-<hash>.bin (container kind `kind`; after the hash its payload is
+// read by `read`), else `compute()` written there by `write` (reduction_cache.hpp, contract).
+template <class Read, class Compute, class Write>
+auto cachedValue(const std::filesystem::path& dir, const std::string& prefix, const std::string& hash, const char* kind,
+                 const std::string& description, Read read, Compute compute, Write write) -> decltype(compute()) {
+  const std::filesystem::path file = dir / (prefix + "-" + hash + ".bin");
   if (std::filesystem::exists(file)) {
     try {
-      return parse(adapter::readCheckpointFile(file, kind, description), description + " " + file.string());
+      const std::string payload = adapter::readCheckpointFile(file, kind, description);
+      adapter::PayloadReader in(payload, description + " " + file.string());
+      if (const std::string recorded = in.getString(); recorded != hash)
+        in.fail("records the hash " + recorded + ", not its name's " + hash);
+      return read(in);
     } catch (const adapter::CouplingError& e) {
       throw std::runtime_error(std::string(e.what()) + "; delete the file and the next run computes it again");
     }
   }
   auto value = compute();
   std::error_code error;
-  std::filesystem::create_directories(file.parent_path(), error);
-  if (error) throw adapter::OutputError("cannot create the FEM cache directory " + file.parent_path().string() + ": " + error.message());
-  adapter::writeFileAtomically(file, adapter::checkpointImage(kind, payload(value)));
+  std::filesystem::create_directories(dir, error);
+  if (error) throw adapter::OutputError("cannot create the FEM cache directory " + dir.string() + ": " + error.message());
+  adapter::PayloadWriter out;
+  out.putString(hash);
+  write(value, out);
+  adapter::writeFileAtomically(file, adapter::checkpointImage(kind, out.bytes()));
   return value;
 }
 
-std::string modalPayload(const ModalBasis& b, const std::string& hash) {
-  adapter::PayloadWriter out;
-  out.putString(hash);
+void writeModal(const ModalBasis& b, adapter::PayloadWriter& out) {
   out.put(static_cast<std::uint64_t>(b.phi.rows()));
   out.put(b.highest_mode_Hz);
   out.putVector(std::vector<double>(b.omega2.data(), b.omega2.data() + b.omega2.size()));
   out.putVector(std::vector<double>(b.phi.data(), b.phi.data() + b.phi.size()));
   out.putVector(lowerTriangle(b.residual));
-  return out.bytes();
 }
 
-ModalBasis parseModal(const std::string& payload, const std::string& hash, const std::string& what) {
-  adapter::PayloadReader in(payload, what);
-  if (const std::string recorded = in.getString(); recorded != hash)
-    in.fail("records the hash " + recorded + ", not its name's " + hash);
+ModalBasis readModal(adapter::PayloadReader& in) {
   const auto free = in.get<std::uint64_t>();
   ModalBasis b;
   in.get(b.highest_mode_Hz);
@@ -176,13 +172,13 @@ std::filesystem::path reductionFile(const FullModel& model, const std::filesyste
 ReducedModel reduceCached(const FullModel& model, const std::filesystem::path& dir, const std::function<void(double)>& progress) {
   const std::string hash = fullModelHash(model);
   return cachedValue(
-      dir / ("reduction-" + hash + ".bin"), kReductionKind, "keypoint reduction cache",
-      [&](const std::string& payload, const std::string& what) {
-        ReducedModel r = parseReduction(payload, hash, what);
+      dir, "reduction", hash, kReductionKind, "keypoint reduction cache",
+      [&](adapter::PayloadReader& in) {
+        ReducedModel r = readReduction(in);
         if (progress) progress(1.0);
         return r;
       },
-      [&] { return reduce(model, progress); }, [&](const ReducedModel& r) { return payloadOf(r, hash); });
+      [&] { return reduce(model, progress); }, writeReduction);
 }
 
 ModalBasis modalBasisCached(const FullModel& full, const ReducedModel& reduced, double dt_s, const std::filesystem::path& dir) {
@@ -190,10 +186,8 @@ ModalBasis modalBasisCached(const FullModel& full, const ReducedModel& reduced, 
   std::string key = fullModelHash(full);
   key.append(reinterpret_cast<const char*>(&dt_s), sizeof dt_s).append(reinterpret_cast<const char*>(&truncation), sizeof truncation);
   const std::string hash = hexOf(study::fnv1a64(key));
-  return cachedValue(
-      dir / ("modal-" + hash + ".bin"), kModalKind, "modal basis cache",
-      [&](const std::string& payload, const std::string& what) { return parseModal(payload, hash, what); },
-      [&] { return modalBasis(reduced, dt_s, truncation); }, [&](const ModalBasis& b) { return modalPayload(b, hash); });
+  return cachedValue(dir, "modal", hash, kModalKind, "modal basis cache", readModal,
+                     [&] { return modalBasis(reduced, dt_s, truncation); }, writeModal);
 }
 
 std::filesystem::path defaultReductionDirectory() {

@@ -96,7 +96,7 @@ TEST_CASE("a damaged or misnamed reduction file is refused, naming the file, the
     const FullModel other_full = buildPlateModel(other);
     reduceCached(other_full, cache);
     std::filesystem::rename(reductionFile(other_full, cache), file);
-    CHECK_THROWS_WITH(reduceCached(full, cache), Catch::Contains(file.string()) && Catch::Contains("records the model hash " + fullModelHash(other_full)));
+    CHECK_THROWS_WITH(reduceCached(full, cache), Catch::Contains(file.string()) && Catch::Contains("records the hash " + fullModelHash(other_full)));
   }
 }
 
