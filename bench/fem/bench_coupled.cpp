@@ -1,12 +1,13 @@
 // Share of the FEM client in a coupled run (fem/coupled_driver.hpp) on a study's bin with the built-in
-// DEM: the time spent inside the DEM's coupling calls against the rest (FEM step, sensors, outputs,
-// and with a remote DEM the protocol), for the full and the modal integration (study
-// fem.integration; --integrations picks them) and the DEM in the client's process or served over
-// ipc:// from a thread of its own as demfem-dem serves it (--placements), in interleaved rounds on
-// the same settled soil. The DEM's time is measured where it runs (the server's thread when
-// remote), so a client's work overlapped with the DEM's interval (CouplingApi::advance) costs the
-// run nothing. Wall time, and processor time of the client's and the DEM's calling threads; the DEM
-// runs on the study's dem.threads. Prints a table; --json writes the same.
+// DEM, per FEM step: the DEM's own time (measured where it runs: the server's thread when remote),
+// the client's FEM step (integrator, sensors, the driver: its wall time outside every coupling call,
+// and its processor time), the protocol (what the client waits on its calls beyond the DEM's time)
+// and the step's outputs where they hold the run up (in process; remote they run during the DEM's
+// interval, CouplingApi::advance, and cost the run nothing unless longer than it). For the full and
+// the modal integration (study fem.integration; --integrations) and the DEM in the client's process
+// or served over ipc:// from a thread of its own as demfem-dem serves it (--placements), in
+// interleaved rounds on the same settled soil; the DEM runs on the study's dem.threads. Prints a
+// table of medians over the rounds; --json writes the same.
 #include "demfem/adapter/forwarding_api.hpp"
 #include "demfem/adapter/remote_proxy.hpp"
 #include "demfem/adapter/server.hpp"
@@ -38,58 +39,78 @@ double threadCpuSeconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-// Time spent inside the DEM's calls (wall, and processor time of the calling thread).
+// Time spent inside calls (wall, and processor time of the calling thread).
 struct Clocks {
   double wall_s = 0, cpu_s = 0;
 };
 
-// Adds the wall and thread processor time of every call to `inside`.
-class TimedDem final : public adapter::ForwardingApi {
-  struct Scope {
-    explicit Scope(Clocks& c) : clocks(c) {}
-    ~Scope() {
-      clocks.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
-      clocks.cpu_s += threadCpuSeconds() - c0;
-    }
-    Clocks& clocks;
-    Clock::time_point t0 = Clock::now();
-    double c0 = threadCpuSeconds();
-  };
-
+class Scope {
  public:
-  explicit TimedDem(std::unique_ptr<adapter::CouplingApi> inner) : ForwardingApi(*inner), inner_(std::move(inner)) {}
-  Clocks inside;
-
-  adapter::BackendInfo info() override { Scope s(inside); return inner().info(); }
-  std::vector<adapter::GeometryInfo> geometries() override { Scope s(inside); return inner().geometries(); }
-  double time() override { Scope s(inside); return inner().time(); }
-  adapter::NodeArray nodePositions(const std::string& g) override { Scope s(inside); return inner().nodePositions(g); }
-  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { Scope s(inside); return inner().nodeForces(g, m); }
-  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { Scope s(inside); inner().setNodePositions(g, x); }
-  void simulate(double d) override { Scope s(inside); inner().simulate(d); }
-  // In process the client's work runs on this thread before the interval: it is not the DEM's.
-  adapter::NodeArray advance(const std::string& g, const adapter::NodeArray& x, double d, adapter::ForceMode m,
-                             const std::function<void()>& work) override {
-    if (work) work();
-    Scope s(inside);
-    return inner().advance(g, x, d, m, {});
+  explicit Scope(Clocks& c) : clocks_(c) {}
+  ~Scope() {
+    clocks_.wall_s += std::chrono::duration<double>(Clock::now() - t0_).count();
+    clocks_.cpu_s += threadCpuSeconds() - c0_;
   }
-  adapter::RigidMotion rigidMotion(const std::string& g) override { Scope s(inside); return inner().rigidMotion(g); }
-  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { Scope s(inside); inner().setRigidMotion(g, m); }
-  void checkpoint(const fs::path& f) override { Scope s(inside); inner().checkpoint(f); }
-  void restore(const fs::path& f) override { Scope s(inside); inner().restore(f); }
+  Scope(const Scope&) = delete;
+  Scope& operator=(const Scope&) = delete;
 
  private:
-  std::unique_ptr<adapter::CouplingApi> inner_;
+  Clocks& clocks_;
+  Clock::time_point t0_ = Clock::now();
+  double c0_ = threadCpuSeconds();
 };
 
+// Adds the wall and thread processor time of every call to `calls`, and of the client's work that
+// advance() runs (the step's outputs) to `work` as well. advance() is forwarded as one call, so a
+// remote proxy below still overlaps that work with the DEM's interval. Placed on the client's side
+// it times what the client waits for (in process, calls - work is the DEM's own time); on the
+// server's thread, the DEM's own time.
+class TimedApi final : public adapter::ForwardingApi {
+ public:
+  explicit TimedApi(adapter::CouplingApi& inner) : ForwardingApi(inner) {}
+  TimedApi(const TimedApi&) = delete;
+  TimedApi& operator=(const TimedApi&) = delete;
+  Clocks calls, work;
+
+  adapter::BackendInfo info() override { Scope s(calls); return inner().info(); }
+  std::vector<adapter::GeometryInfo> geometries() override { Scope s(calls); return inner().geometries(); }
+  double time() override { Scope s(calls); return inner().time(); }
+  adapter::NodeArray nodePositions(const std::string& g) override { Scope s(calls); return inner().nodePositions(g); }
+  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { Scope s(calls); return inner().nodeForces(g, m); }
+  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { Scope s(calls); inner().setNodePositions(g, x); }
+  void simulate(double d) override { Scope s(calls); inner().simulate(d); }
+  adapter::NodeArray advance(const std::string& g, const adapter::NodeArray& x, double d, adapter::ForceMode m,
+                             const std::function<void()>& client_work) override {
+    Scope s(calls);
+    if (!client_work) return inner().advance(g, x, d, m, {});
+    return inner().advance(g, x, d, m, [&] {
+      Scope w(work);
+      client_work();
+    });
+  }
+  adapter::RigidMotion rigidMotion(const std::string& g) override { Scope s(calls); return inner().rigidMotion(g); }
+  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { Scope s(calls); inner().setRigidMotion(g, m); }
+  void checkpoint(const fs::path& f) override { Scope s(calls); inner().checkpoint(f); }
+  void restore(const fs::path& f) override { Scope s(calls); inner().restore(f); }
+};
+
+// One run's clocks, per FEM step: the DEM's own time, the client's FEM step (integrator, sensors,
+// the driver; everything outside its coupling calls), the step's outputs where they hold the run
+// up (in process; remote they run during the DEM's interval), and the rest of the client's wait on
+// its calls: the protocol (and any output the interval did not hide).
 struct RunCost {
   std::int64_t steps = 0;
-  double reduction_s = 0;           // the driver's construction (Eq 11-15 and the integrator set-up)
-  Clocks total, dem;
-  double fem_cpu_s = 0;             // the client's processor time outside the DEM's calls
-  double femWallShare() const { return (total.wall_s - dem.wall_s) / total.wall_s; }
-  double femCpuShare() const { return fem_cpu_s / (fem_cpu_s + dem.cpu_s); }
+  double reduction_s = 0;  // the driver's construction (Eq 11-15 and the integrator set-up)
+  Clocks total;            // driver.run() on the client's thread
+  Clocks client;           // inside the coupling calls, seen from the client
+  Clocks client_work;      // the outputs the client runs inside advance()
+  Clocks dem;              // the DEM's own time where it runs (without the client's work)
+  bool outputs_inline = true;
+  double perStep_ms(double s) const { return 1e3 * s / static_cast<double>(steps); }
+  double femStep_s() const { return total.wall_s - client.wall_s; }
+  double femStepCpu_s() const { return total.cpu_s - client.cpu_s; }
+  double outputs_s() const { return outputs_inline ? client_work.wall_s : 0.0; }
+  double protocol_s() const { return std::max(0.0, client.wall_s - outputs_s() - dem.wall_s); }
 };
 
 enum class Placement { InProcess, Remote };
@@ -102,8 +123,13 @@ std::string placementName(Placement p) {
   return {};
 }
 
+struct RemoteClocks {
+  std::int64_t steps = 0;
+  Clocks calls, work;  // the client's, around the proxy
+};
+
 // The driver against `dem` served over ipc:// from a thread of this process (as demfem-dem serves it).
-std::int64_t runRemote(fem::CoupledDriver& driver, adapter::CouplingApi& dem, const fs::path& out) {
+RemoteClocks runRemote(fem::CoupledDriver& driver, adapter::CouplingApi& dem, const fs::path& out) {
   fs::create_directories(out);
   protocol::Context context;
   protocol::ServerSocket socket(context, "ipc://" + (out / "dem.ipc").string());
@@ -115,20 +141,22 @@ std::int64_t runRemote(fem::CoupledDriver& driver, adapter::CouplingApi& dem, co
       std::fprintf(stderr, "DEM server: %s\n", e.what());
     }
   });
-  std::int64_t steps = 0;
+  RemoteClocks clocks;
   try {
     adapter::RemoteOptions remote;
     remote.endpoint = socket.endpoint();
     remote.client_name = "demfem-bench-coupled";
     adapter::RemoteProxy proxy(remote, &context);
-    steps = driver.run(proxy).steps;
+    TimedApi client(proxy);
+    clocks.steps = driver.run(client).steps;
+    clocks.calls = client.calls, clocks.work = client.work;
     proxy.shutdown();
   } catch (...) {
     serving.join();
     throw;
   }
   serving.join();
-  return steps;
+  return clocks;
 }
 
 RunCost coupledRun(const study::Study& study, const fs::path& out, std::optional<std::int64_t> steps, Placement placement) {
@@ -139,19 +167,28 @@ RunCost coupledRun(const study::Study& study, const fs::path& out, std::optional
   auto t0 = Clock::now();
   fem::CoupledDriver driver(study, options);
   cost.reduction_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  TimedDem dem(builtin::makeBackend(study));  // the settled soil: deposited by the first run, read after
+  const auto backend = builtin::makeBackend(study);  // the settled soil: deposited by the first run, read after
   t0 = Clock::now();
   const double c0 = threadCpuSeconds();
   switch (placement) {
-    case Placement::InProcess: cost.steps = driver.run(dem).steps; break;
-    case Placement::Remote: cost.steps = runRemote(driver, dem, out); break;
+    case Placement::InProcess: {
+      TimedApi client(*backend);
+      cost.steps = driver.run(client).steps;
+      cost.client = client.calls, cost.client_work = client.work;
+      cost.dem = {client.calls.wall_s - client.work.wall_s, client.calls.cpu_s - client.work.cpu_s};
+      break;
+    }
+    case Placement::Remote: {
+      TimedApi server(*backend);  // on the server's thread: the DEM's own time
+      const RemoteClocks remote = runRemote(driver, server, out);
+      cost.steps = remote.steps;
+      cost.client = remote.calls, cost.client_work = remote.work;
+      cost.dem = server.calls;
+      cost.outputs_inline = false;
+      break;
+    }
   }
   cost.total = {std::chrono::duration<double>(Clock::now() - t0).count(), threadCpuSeconds() - c0};
-  cost.dem = dem.inside;  // on the server's thread when remote, this thread in process
-  switch (placement) {
-    case Placement::InProcess: cost.fem_cpu_s = cost.total.cpu_s - cost.dem.cpu_s; break;
-    case Placement::Remote: cost.fem_cpu_s = cost.total.cpu_s; break;
-  }
   return cost;
 }
 
@@ -209,30 +246,35 @@ int main(int argc, char** argv) {
       }
     fs::remove_all(scratch);
     nlohmann::json rows = nlohmann::json::array();
-    std::printf("%-8s %-10s %8s %14s %14s %14s %14s %14s\n", "FEM", "DEM", "steps", "set-up (s)", "DEM/step (ms)", "FEM/step (ms)",
-                "FEM wall (%)", "FEM cpu (%)");
+    std::printf("%-6s %-10s %6s %10s %10s %10s %10s %10s %10s %12s %10s\n", "FEM", "DEM", "steps", "set-up(s)", "DEM(ms)",
+                "FEM(ms)", "FEMcpu(ms)", "proto(ms)", "output(ms)", "FEM+proto(%)", "output(%)");
     for (const auto& v : variants) {
-      std::vector<double> setup, dem_ms, fem_ms, wall_share, cpu_share;
+      std::vector<double> setup, dem_ms, fem_ms, fem_cpu_ms, protocol_ms, outputs_ms, fem_share, outputs_share;
       for (const RunCost& c : v.costs) {
-        const auto n = static_cast<double>(c.steps);
         setup.push_back(c.reduction_s);
-        dem_ms.push_back(1e3 * c.dem.wall_s / n);
-        fem_ms.push_back(1e3 * (c.total.wall_s - c.dem.wall_s) / n);
-        wall_share.push_back(100 * c.femWallShare());
-        cpu_share.push_back(100 * c.femCpuShare());
+        dem_ms.push_back(c.perStep_ms(c.dem.wall_s));
+        fem_ms.push_back(c.perStep_ms(c.femStep_s()));
+        fem_cpu_ms.push_back(c.perStep_ms(c.femStepCpu_s()));
+        protocol_ms.push_back(c.perStep_ms(c.protocol_s()));
+        outputs_ms.push_back(c.perStep_ms(c.outputs_s()));
+        fem_share.push_back(100 * (c.femStep_s() + c.protocol_s()) / c.total.wall_s);
+        outputs_share.push_back(100 * c.outputs_s() / c.total.wall_s);
       }
       const std::string placement = placementName(v.placement);
-      std::printf("%-8s %-10s %8lld %14.2f %14.3f %14.4f %14.2f %14.2f\n", v.integration.c_str(), placement.c_str(),
-                  static_cast<long long>(v.costs.front().steps), median(setup), median(dem_ms), median(fem_ms), median(wall_share),
-                  median(cpu_share));
+      std::printf("%-6s %-10s %6lld %10.2f %10.3f %10.4f %10.4f %10.4f %10.4f %12.2f %10.2f\n", v.integration.c_str(),
+                  placement.c_str(), static_cast<long long>(v.costs.front().steps), median(setup), median(dem_ms), median(fem_ms),
+                  median(fem_cpu_ms), median(protocol_ms), median(outputs_ms), median(fem_share), median(outputs_share));
       rows.push_back({{"integration", v.integration},
                       {"dem", placement},
                       {"steps", v.costs.front().steps},
                       {"setup_s", median(setup)},
                       {"dem_per_step_ms", median(dem_ms)},
-                      {"fem_per_step_ms", median(fem_ms)},
-                      {"fem_wall_percent", median(wall_share)},
-                      {"fem_cpu_percent", median(cpu_share)}});
+                      {"fem_step_per_step_ms", median(fem_ms)},
+                      {"fem_step_cpu_per_step_ms", median(fem_cpu_ms)},
+                      {"protocol_per_step_ms", median(protocol_ms)},
+                      {"outputs_inline_per_step_ms", median(outputs_ms)},
+                      {"fem_and_protocol_wall_percent", median(fem_share)},
+                      {"outputs_inline_wall_percent", median(outputs_share)}});
     }
     cli::writeJson(json_target, {{"study", study_file}, {"rounds", rounds}, {"runs", rows}});
   });
