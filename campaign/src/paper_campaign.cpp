@@ -42,8 +42,10 @@ class CheckpointsInDirectory final : public adapter::ForwardingApi {
   fs::path dir_;
 };
 
-// Adds this call's wall time to the case's record (kRunRecord), so a resumed case reports the sum.
-void recordWallTime(const fs::path& run_dir, double wall_s, double estimate_s) {
+// Adds `wall_s` to the case's record (kRunRecord), counting a call when `new_call`: the record
+// sums the time of every call that ran the case, each up to its last checkpoint (a call killed after
+// it leaves that much, its later steps are run again) or its end.
+void recordWallTime(const fs::path& run_dir, double wall_s, double estimate_s, bool new_call) {
   const fs::path file = run_dir / kRunRecord;
   nlohmann::json doc = nlohmann::json::object();
   if (std::ifstream in(file); in) {
@@ -54,7 +56,7 @@ void recordWallTime(const fs::path& run_dir, double wall_s, double estimate_s) {
     }
   }
   doc["wall_time_s"] = doc.value("wall_time_s", 0.0) + wall_s;
-  doc["calls"] = doc.value("calls", 0) + 1;
+  doc["calls"] = doc.value("calls", 0) + (new_call ? 1 : 0);
   doc["estimated_wall_time_s"] = estimate_s;
   adapter::writeFileAtomically(file, doc.dump(2) + '\n');
 }
@@ -63,6 +65,8 @@ struct Case {
   CaseStatus status;
   study::Study study;
   Clock::time_point started;
+  Clock::time_point recorded;  // this call's time is in the run record up to here
+  bool call_recorded = false;  // this call is counted in the record's calls
 };
 
 // Claims the run directory for the study (see contract) and says whether it resumes.
@@ -139,12 +143,14 @@ class Runner {
       c.status.total_steps = p.total_steps;
       c.status.eta_s = p.eta_s;
       c.status.wall_s = std::chrono::duration<double>(Clock::now() - c.started).count();
+      if (p.step % o_.checkpoint_every == 0) recordCall(c);  // a checkpoint was just written
     };
     run.resume = c.status.resumed;
     {
       const std::lock_guard lock(mutex_);
       c.status.state = CaseState::Running;
-      c.started = Clock::now();
+      c.started = c.recorded = Clock::now();
+      c.call_recorded = false;
     }
     try {
       study::Study run_study = c.study;
@@ -168,11 +174,19 @@ class Runner {
     const std::lock_guard lock(mutex_);
     c.status.wall_s = std::chrono::duration<double>(Clock::now() - c.started).count();
     try {
-      recordWallTime(c.status.run_dir, c.status.wall_s, c.status.estimate_wall_s);
+      recordCall(c);
     } catch (const std::exception& e) {
       c.status.state = CaseState::Failed;
       c.status.message = e.what();
     }
+  }
+
+  // Adds this call's time since the last record to the case's run record. Called with mutex_ held.
+  static void recordCall(Case& c) {
+    const Clock::time_point now = Clock::now();
+    recordWallTime(c.status.run_dir, std::chrono::duration<double>(now - c.recorded).count(), c.status.estimate_wall_s, !c.call_recorded);
+    c.recorded = now;
+    c.call_recorded = true;
   }
 
   // Time left overall: running cases at their own rate, the pending ones at their estimate scaled

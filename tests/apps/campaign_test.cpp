@@ -42,6 +42,12 @@ TEST_CASE("demfem campaign resumes an interrupted case from its checkpoint, skip
   Process first(campaign(runs, "first"), dir / "first");
   const fs::path checkpoint = run_dir / "checkpoint" / "fem_state.bin";
   REQUIRE(waitForFile(checkpoint, first, 300s));
+  // The run record holds the call's time from its first checkpoint on: a call killed now (a session's
+  // end) still counts what it kept.
+  REQUIRE(waitForFile(run_dir / "campaign_case.json", first, 60s));
+  const nlohmann::json running_record = nlohmann::json::parse(readText(run_dir / "campaign_case.json"));
+  CHECK(running_record["calls"] == 1);
+  CHECK(running_record["wall_time_s"].get<double>() > 0);
   // A second campaign on the same directory while the first runs: refused at once, naming the
   // holder (the resumed run below equalling the uninterrupted one shows it wrote nothing there).
   Process intruder(campaign(runs, "intruder"), dir / "intruder");
@@ -61,6 +67,9 @@ TEST_CASE("demfem campaign resumes an interrupted case from its checkpoint, skip
   const nlohmann::json resumed = caseOf(dir / "second.json");
   CHECK(resumed["state"] == "done");
   CHECK(resumed["resumed"] == true);
+  const nlohmann::json record = nlohmann::json::parse(readText(run_dir / "campaign_case.json"));
+  CHECK(record["calls"] == 2);
+  CHECK(record["wall_time_s"].get<double>() > running_record["wall_time_s"].get<double>());
   CHECK(nlohmann::json::parse(readText(run_dir / "sensors.json"))["complete"] == true);
 
   Process third(campaign(runs, "third"), dir / "third");

@@ -5,7 +5,9 @@
 // - A case is one study file (kind coupled or dem-only, DEM backend builtin); its name is the file's
 //   stem, its run directory `directory / name`. Two study files of one stem are an ArgumentError.
 // - Run directory: `study.json` (the effective study the case runs, written before it starts),
-//   `campaign_case.json` (kRunRecord: wall time summed over every call that ran it, calls, estimate),
+//   `campaign_case.json` (kRunRecord: wall time summed over every call that ran it, each call's
+//   written at every checkpoint and at its end, so a killed call leaves its time up to its last
+//   checkpoint, the steps after it being run again; calls; estimate),
 //   the coupled run's outputs (fem/coupled_driver.hpp: sensors.csv, sensors.json, ...), the DEM's
 //   ParaView files with the FEM's in `vtk/` (output.vtk_every > 0; the study's output.directory is
 //   not used), and
