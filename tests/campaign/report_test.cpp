@@ -233,14 +233,15 @@ ReportOptions paperReportOptions(const fs::path& campaign_dir) {
 
 }  // namespace
 
-TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an unfinished case has null run figures", "[campaign][report]") {
+TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an unfinished case has null run figures and the cost of the finished runs of its model",
+          "[campaign][report]") {
   TempDir dir("paper-report");
   const fs::path studies = fs::path(DEMFEM_SOURCE_DIR) / "studies" / "paper";
   writeFinishedPmma30Run(dir / "campaign");
   const ReportOptions options = paperReportOptions(dir / "campaign");
   nlohmann::json doc;
   writeStaged(dir / "report", [&](analysis::StagedOutput& out) {
-    doc = writePaperReport({studies / "pmma_coupled_30.json", studies / "s235_dem_18.json"}, options, out);
+    doc = writePaperReport({studies / "pmma_coupled_30.json", studies / "s235_dem_18.json", studies / "s235_coupled_18.json"}, options, out);
   });
   checkCsvMatchesJson(readText(dir / "report" / "paper-reproduction.csv"), doc["cases"]);
 
@@ -265,14 +266,21 @@ TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an un
   CHECK(s235["finished"] == false);
   CHECK(s235["force_mean_N"].is_null());
   CHECK(s235["tilt_min_deg"].is_null());
-  CHECK(s235["projected_full_scale_h"].get<double>() == Approx(1800.0 / 3600));
+  CHECK(s235["projected_full_scale_h"].get<double>() == Approx(1800.0 / 3600));  // no finished DEM run: the estimate
+  // A DEM-FEM case not run: its estimate (1800 s) times measured / estimated of the finished
+  // DEM-FEM run (5400 / 3000 s).
+  const nlohmann::json& coupled = doc["cases"][2];
+  CHECK(coupled["finished"] == false);
+  CHECK(coupled["projected_full_scale_h"].get<double>() == Approx(1800.0 * 1.8 / 3600));
 
   const std::string md = readText(dir / "report" / "paper-reproduction.md");
   checkContains(md, {"| pmma_coupled_30 | PMMA | DEM-FEM | 30 | ",
                      "| s235_dem_18 | S235 | DEM | 18 | ",
                      "| not finished |  |  |",
                      "| pmma_coupled_30 | 2.00-2.10 | 2.10-2.30 | ",
-                     "| s235_dem_18 | 44 | not finished | 0.5 (estimate) | 0.011 |  |"});
+                     "| s235_dem_18 | 44 | not finished | 0.5 (estimate) | 0.011 |  |",
+                     "| pmma_coupled_30 | 54 | 5400 s (600 mm stroke) | 1.5 (measured cost) | 0.028 |",
+                     "| s235_coupled_18 | 28 | not finished | 0.9 (estimate x 1.8, measured / estimated of 1 finished DEM-FEM run) | 0.032 |  |"});
 }
 
 TEST_CASE("the paper report keeps each evaluation: without its run a case is reported from it, as before", "[campaign][report]") {
