@@ -402,7 +402,7 @@ TEST_CASE("the committed kept evaluations are of the shipped paper studies, also
   nlohmann::json doc;
   writeStaged(dir / "report", [&](analysis::StagedOutput& out) { doc = writePaperReport(files, paperReportOptions(dir / "campaign"), out); });
   for (const auto& c : doc["cases"]) {
-    INFO(c["case"]);
+    INFO(c.at("name"));
     CHECK(c["kept"] == true);
   }
   CHECK(readText(dir / "report" / "paper-reproduction.md").find("Not used") == std::string::npos);
