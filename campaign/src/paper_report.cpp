@@ -410,6 +410,9 @@ CellValue movingDepthAgainstPaper(Case c) {
 
 MarkdownCell ifFinished(MarkdownCell cell) { return md::onlyIf("finished", std::move(cell), ""); }
 
+// A DEM-only case drags a rigid tool: it has no deformation to report.
+bool deforms(Case c) { return c->study.kind != study::StudyKind::DemOnly; }
+
 // paper-reproduction.csv and the JSON's `cases`: one row per case, every table of the report a view of it.
 const Section<Case>& caseSection() {
   using R = Case;
@@ -431,10 +434,11 @@ const Section<Case>& caseSection() {
        {"window_end_mm", [](R c) -> CellValue { return ofRun(c, &Evaluated::window_end_mm); }},
        {"force_mean_N", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.force_N.mean) : std::nullopt; }},
        {"force_std_N", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.force_N.std_dev) : std::nullopt; }},
+       {"deforms", [](R c) -> CellValue { return deforms(c); }},
        {"deformation_mean_mm",
-        [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.deformation_mm.mean) : std::nullopt; }},
+        [](R c) -> CellValue { return c->run && deforms(c) ? std::optional<double>(c->run->window.deformation_mm.mean) : std::nullopt; }},
        {"deformation_std_mm",
-        [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->window.deformation_mm.std_dev) : std::nullopt; }},
+        [](R c) -> CellValue { return c->run && deforms(c) ? std::optional<double>(c->run->window.deformation_mm.std_dev) : std::nullopt; }},
        {"fit_signal", [](R c) -> CellValue { return c->run ? c->run->fit_signal : std::string(); }},
        {"fit_a", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->fit.a) : std::nullopt; }},
        {"fit_b", [](R c) -> CellValue { return c->run ? std::optional<double>(c->run->fit.b) : std::nullopt; }},
@@ -485,7 +489,8 @@ const Section<Case>& caseSection() {
        {"window mm", ifFinished(md::concat({md::format("window_begin_mm", "%.0f"), md::literal("-"), md::format("window_end_mm", "%.0f")}))},
        {"force N (mean ± sd)", ifFinished(md::concat({md::format("force_mean_N", "%.3g"), md::literal(" ± "), md::format("force_std_N", "%.2g")}))},
        {"deformation mm (mean ± sd)",
-        ifFinished(md::concat({md::format("deformation_mean_mm", "%.3g"), md::literal(" ± "), md::format("deformation_std_mm", "%.2g")}))},
+        md::onlyIf("deforms", ifFinished(md::concat({md::format("deformation_mean_mm", "%.3g"), md::literal(" ± "), md::format("deformation_std_mm", "%.2g")})),
+                   "rigid tool")},
        {"FFT fit A = a f^b", ifFinished(md::concat({md::text("fit_signal"), md::literal(": a = "), md::format("fit_a", "%.3g"), md::literal(", b = "),
                                                    md::format("fit_b", "%.3f"), md::literal(" ± "), md::format("fit_b_std_error", "%.2f")}))}}};
   return section;

@@ -267,6 +267,7 @@ TEST_CASE("the paper report's table: every CSV cell equals its JSON value, an un
   CHECK(s235["force_mean_N"].is_null());
   CHECK(s235["tilt_min_deg"].is_null());
   CHECK(s235["projected_full_scale_h"].get<double>() == Approx(1800.0 / 3600));  // no finished DEM run: the estimate
+  CHECK(s235["deforms"] == false);  // DEM only: a rigid tool
   // A DEM-FEM case not run: its estimate (1800 s) times measured / estimated of the finished
   // DEM-FEM run (5400 / 3000 s).
   const nlohmann::json& coupled = doc["cases"][2];
@@ -404,7 +405,12 @@ TEST_CASE("the committed kept evaluations are of the shipped paper studies, also
   for (const auto& c : doc["cases"]) {
     INFO(c.at("name"));
     CHECK(c["kept"] == true);
+    // A DEM-only run drags a rigid tool: no deformation, said so, instead of a measured 0 mm.
+    if (c.at("model") == "DEM") CHECK(c.at("deformation_mean_mm").is_null());
   }
+  const std::string md_kept = readText(dir / "report" / "paper-reproduction.md");
+  CHECK(md_kept.find("| s235_dem_42 | S235 | DEM | 42 | 32.22 (32.22) | finished | 600 | 100-500 | ") != std::string::npos);
+  CHECK(md_kept.find("| rigid tool |") != std::string::npos);
   CHECK(readText(dir / "report" / "paper-reproduction.md").find("Not used") == std::string::npos);
 
   SECTION("but not after a value that changes the numbers") {
