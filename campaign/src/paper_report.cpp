@@ -410,8 +410,8 @@ CellValue movingDepthAgainstPaper(Case c) {
 
 MarkdownCell ifFinished(MarkdownCell cell) { return md::onlyIf("finished", std::move(cell), ""); }
 
-// A DEM-only case drags a rigid tool: it has no deformation to report.
-bool deforms(Case c) { return c->study.kind != study::StudyKind::DemOnly; }
+// A rigid tool (the paper's DEM-only cases) has no deformation to report.
+bool deforms(Case c) { return c->study.tools.front().fem.deformable; }
 
 // paper-reproduction.csv and the JSON's `cases`: one row per case, every table of the report a view of it.
 const Section<Case>& caseSection() {

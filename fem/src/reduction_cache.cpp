@@ -15,6 +15,8 @@ namespace {
 
 constexpr const char* kReductionKind = "fem-reduction";
 constexpr const char* kModalKind = "fem-modal-basis";
+constexpr const char* kReductionPrefix = "reduction";  // the file names of reduction_cache.hpp
+constexpr const char* kModalPrefix = "modal";
 
 template <class T> void append(std::string& bytes, const T* values, std::size_t count) {
   bytes.append(reinterpret_cast<const char*>(values), count * sizeof(T));
@@ -98,12 +100,17 @@ std::string hexOf(std::uint64_t value) {
   return hex;
 }
 
-// The value kept in dir/<prefix>-<hash>.bin (container kind `kind`; after the hash its payload is
+// The one name of a cache file: dir/<prefix>-<hash>.bin.
+std::filesystem::path cacheFile(const std::filesystem::path& dir, const std::string& prefix, const std::string& hash) {
+  return dir / (prefix + "-" + hash + ".bin");
+}
+
+// The value kept in cacheFile(dir, prefix, hash) (container kind `kind`; after the hash its payload is
 // read by `read`), else `compute()` written there by `write` (reduction_cache.hpp, contract).
 template <class Read, class Compute, class Write>
 auto cachedValue(const std::filesystem::path& dir, const std::string& prefix, const std::string& hash, const char* kind,
                  const std::string& description, Read read, Compute compute, Write write) -> decltype(compute()) {
-  const std::filesystem::path file = dir / (prefix + "-" + hash + ".bin");
+  const std::filesystem::path file = cacheFile(dir, prefix, hash);
   if (std::filesystem::exists(file)) {
     try {
       const std::string payload = adapter::readCheckpointFile(file, kind, description);
@@ -166,13 +173,13 @@ std::string fullModelHash(const FullModel& model) {
 }
 
 std::filesystem::path reductionFile(const FullModel& model, const std::filesystem::path& dir) {
-  return dir / ("reduction-" + fullModelHash(model) + ".bin");
+  return cacheFile(dir, kReductionPrefix, fullModelHash(model));
 }
 
 ReducedModel reduceCached(const FullModel& model, const std::filesystem::path& dir, const std::function<void(double)>& progress) {
   const std::string hash = fullModelHash(model);
   return cachedValue(
-      dir, "reduction", hash, kReductionKind, "keypoint reduction cache",
+      dir, kReductionPrefix, hash, kReductionKind, "keypoint reduction cache",
       [&](adapter::PayloadReader& in) {
         ReducedModel r = readReduction(in);
         if (progress) progress(1.0);
@@ -186,7 +193,7 @@ ModalBasis modalBasisCached(const FullModel& full, const ReducedModel& reduced, 
   std::string key = fullModelHash(full);
   key.append(reinterpret_cast<const char*>(&dt_s), sizeof dt_s).append(reinterpret_cast<const char*>(&truncation), sizeof truncation);
   const std::string hash = hexOf(study::fnv1a64(key));
-  return cachedValue(dir, "modal", hash, kModalKind, "modal basis cache", readModal,
+  return cachedValue(dir, kModalPrefix, hash, kModalKind, "modal basis cache", readModal,
                      [&] { return modalBasis(reduced, dt_s, truncation); }, writeModal);
 }
 
