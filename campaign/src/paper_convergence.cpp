@@ -78,6 +78,53 @@ std::optional<ForceExtrapolation> extrapolatedForce(const std::vector<FractionSu
   return ForceExtrapolation{r, std::log2(1 / r), finest.force_N.mean - c2 * r / (1 - r)};
 }
 
+// The runs of the seeds finished at two fractions or more, by seed.
+std::map<std::uint64_t, std::vector<const ConvergencePoint*>> trendRuns(const std::vector<ConvergencePoint>& points) {
+  std::map<std::uint64_t, std::vector<const ConvergencePoint*>> by_seed;
+  for (const ConvergencePoint& p : points)
+    if (p.failure.empty()) by_seed[p.seed].push_back(&p);
+  std::erase_if(by_seed, [](const auto& entry) { return entry.second.size() < 2; });
+  return by_seed;
+}
+
+// Least squares of `quantity` on the fraction, one level per seed (see contract); `span` =
+// coarsest - finest fraction.
+StepTrend stepTrend(const std::map<std::uint64_t, std::vector<const ConvergencePoint*>>& by_seed, double ConvergencePoint::* quantity,
+                    double span, double dof) {
+  std::vector<double> x, y;  // each seed's own mean removed
+  for (const auto& [seed, runs] : by_seed) {
+    double mean_x = 0, mean_y = 0;
+    for (const ConvergencePoint* p : runs) mean_x += p->dt_fraction, mean_y += p->*quantity;
+    mean_x /= static_cast<double>(runs.size()), mean_y /= static_cast<double>(runs.size());
+    for (const ConvergencePoint* p : runs) x.push_back(p->dt_fraction - mean_x), y.push_back(p->*quantity - mean_y);
+  }
+  double sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) sxx += x[i] * x[i], sxy += x[i] * y[i];
+  StepTrend t;
+  t.slope = sxy / sxx;
+  double ss = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) ss += (y[i] - t.slope * x[i]) * (y[i] - t.slope * x[i]);
+  t.slope_se = std::sqrt(ss / dof / sxx);
+  t.change_at_coarsest = t.slope * span;
+  t.change_at_coarsest_se = t.slope_se * span;
+  return t;
+}
+
+std::optional<StepTrends> stepTrends(const std::vector<ConvergencePoint>& points, const std::vector<FractionSummary>& fractions) {
+  const auto by_seed = trendRuns(points);
+  StepTrends t;
+  t.seeds = by_seed.size();
+  for (const auto& [seed, runs] : by_seed) t.runs += runs.size();
+  const double dof = static_cast<double>(t.runs) - static_cast<double>(t.seeds) - 1;
+  if (fractions.size() < 2 || dof < 1) return std::nullopt;
+  const double span = fractions.front().dt_fraction - fractions.back().dt_fraction;
+  t.force_N = stepTrend(by_seed, &ConvergencePoint::force_mean_N, span, dof);
+  t.deformation_mm = stepTrend(by_seed, &ConvergencePoint::deformation_mean_mm, span, dof);
+  t.fit_b = stepTrend(by_seed, &ConvergencePoint::fit_b, span, dof);
+  if (!std::isfinite(t.force_N.slope)) return std::nullopt;  // every seed ran one fraction only, twice
+  return t;
+}
+
 }  // namespace
 
 nlohmann::ordered_json reducedStudy(const nlohmann::ordered_json& base, double length_mm, double width_mm, double stroke_mm,
@@ -140,6 +187,7 @@ ConvergenceSummary summarize(std::vector<ConvergencePoint> points, std::string r
     s.fractions.insert(s.fractions.begin(), f);
   }
   s.force_extrapolation = extrapolatedForce(s.fractions);
+  s.trend = stepTrends(s.points, s.fractions);
   return s;
 }
 
@@ -150,6 +198,10 @@ nlohmann::json toJson(const ConvergenceSummary& s) {
                       {"force_std_N", p.force_std_N}, {"deformation_mean_mm", p.deformation_mean_mm},
                       {"deformation_std_mm", p.deformation_std_mm}, {"fit_b", p.fit_b}, {"fit_a", p.fit_a}, {"wall_time_s", p.wall_s},
                       {"failure", p.failure}});
+  const auto trend = [](const StepTrend& t) {
+    return nlohmann::json{{"slope_per_fraction", t.slope}, {"slope_se", t.slope_se}, {"change_at_coarsest", t.change_at_coarsest},
+                          {"change_at_coarsest_se", t.change_at_coarsest_se}};
+  };
   const auto average = [](const SeedAverage& a) { return nlohmann::json{{"mean", a.mean}, {"change", a.change}, {"change_se", a.change_se}}; };
   nlohmann::json fractions = nlohmann::json::array();
   for (const FractionSummary& f : s.fractions)
@@ -167,7 +219,10 @@ nlohmann::json toJson(const ConvergenceSummary& s) {
           {"force_extrapolation", s.force_extrapolation ? nlohmann::json{{"halving_ratio", s.force_extrapolation->halving_ratio},
                                                                           {"order", s.force_extrapolation->order},
                                                                           {"force_N", s.force_extrapolation->force_N}}
-                                                        : nlohmann::json(nullptr)}};
+                                                        : nlohmann::json(nullptr)},
+          {"trend", s.trend ? nlohmann::json{{"runs", s.trend->runs}, {"seeds", s.trend->seeds}, {"force_N", trend(s.trend->force_N)},
+                                             {"deformation_mm", trend(s.trend->deformation_mm)}, {"fit_b", trend(s.trend->fit_b)}}
+                            : nlohmann::json(nullptr)}};
 }
 
 ConvergenceSummary convergenceFromJson(const nlohmann::json& doc) {
@@ -230,6 +285,17 @@ std::string markdown(const ConvergenceSummary& s) {
       md << (&f == &s.fractions.front() ? " " : ", ") << formatNumber("%g", f.dt_fraction) << " is "
          << formatNumber("%+.1f", 100 * (f.force_N.mean / x->force_N - 1)) << " %";
     md << ".\n";
+  }
+  if (const auto& t = s.trend) {
+    const auto line = [](const StepTrend& x, const char* format) {
+      return formatNumber(format, x.change_at_coarsest) + " ± " + formatNumber("%.2g", x.change_at_coarsest_se);
+    };
+    const double finest_force_N = s.fractions.back().force_N.mean;
+    md << "\nA straight line in the step through all " << t->runs << " runs of the " << t->seeds
+       << " seeds, each seed's own level removed (least squares, ± its standard error), moves from the finest fraction to "
+       << formatNumber("%g", s.fractions.front().dt_fraction) << " the force by " << line(t->force_N, "%+.3g") << " N ("
+       << formatNumber("%+.1f", 100 * t->force_N.change_at_coarsest / finest_force_N) << " %), the deformation by "
+       << line(t->deformation_mm, "%+.3g") << " mm and the fit exponent b by " << line(t->fit_b, "%+.3f") << ".\n";
   }
   return md.str();
 }

@@ -115,3 +115,54 @@ TEST_CASE("the force at dt -> 0 is extrapolated from three halvings whose change
     if (p.dt_fraction == 0.0125) p.force_mean_N += 1;
   CHECK_FALSE(summarize(growing, "test").force_extrapolation);
 }
+
+TEST_CASE("the step trend through all runs is the paired change when two fractions ran, and finds a line that one fluke row hides",
+          "[campaign]") {
+  // Two fractions: the line's change from finest to coarsest is the mean paired change, its
+  // standard error the paired changes' (sd / sqrt(n)). Changes 0.1, 0.3, 0.2 N: mean 0.2, se 0.1 / sqrt(3).
+  std::vector<ConvergencePoint> two;
+  const double change[] = {0.1, 0.3, 0.2};
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    two.push_back(point(0.0125, seed, 7 + 0.5 * static_cast<double>(seed), 0.06, -1.4));
+    two.push_back(point(0.025, seed, 7 + 0.5 * static_cast<double>(seed) + change[seed - 1], 0.06, -1.4));
+  }
+  const ConvergenceSummary paired = summarize(two, "test");
+  REQUIRE(paired.trend);
+  CHECK(paired.trend->runs == 6);
+  CHECK(paired.trend->force_N.change_at_coarsest == Approx(paired.fractions.front().force_N.change).epsilon(1e-9));
+  CHECK(paired.trend->force_N.change_at_coarsest_se == Approx(0.1 / std::sqrt(3.0)).epsilon(1e-9));
+  CHECK(paired.trend->force_N.slope == Approx(0.2 / 0.0125).epsilon(1e-9));
+
+  // Four halvings, no step effect, and one row 0.3 N off at every seed but one (a fluke shared by
+  // the row): the paired rule rejects that row, and with it every coarser fraction; the line
+  // through all runs says the step moves the force by less than its standard error.
+  const double fractions[] = {0.025, 0.0125, 0.00625, 0.003125};
+  const double jitter[4][4] = {{0.05, -0.05, 0.02, -0.02}, {0.3, 0.32, 0.28, -0.1}, {-0.03, 0.04, -0.05, 0.02}, {0, 0, 0, 0}};
+  std::vector<ConvergencePoint> fluke;
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+      const double level = 7 + 0.2 * static_cast<double>(seed);
+      const double noise = jitter[i][seed - 1];
+      fluke.push_back(point(fractions[i], seed, level + noise, 0.06 + 0.001 * noise, -1.4 + noise));
+    }
+  const ConvergenceSummary flukes = summarize(fluke, "test");
+  CHECK(flukes.fractions.front().within);
+  CHECK_FALSE(flukes.fractions[1].within);
+  REQUIRE(flukes.converged_fraction);
+  CHECK(*flukes.converged_fraction == 0.00625);
+  REQUIRE(flukes.trend);
+  CHECK(std::fabs(flukes.trend->force_N.change_at_coarsest) < flukes.trend->force_N.change_at_coarsest_se);
+
+  // The same runs with a line of 20 N per unit fraction added: 0.4375 N between the ends, found
+  // within two standard errors and resolved from zero.
+  for (ConvergencePoint& p : fluke) p.force_mean_N += 20 * p.dt_fraction;
+  const ConvergenceSummary line = summarize(fluke, "test");
+  REQUIRE(line.trend);
+  CHECK(std::fabs(line.trend->force_N.change_at_coarsest - 0.4375) < 2 * line.trend->force_N.change_at_coarsest_se);
+  CHECK(line.trend->force_N.change_at_coarsest > 2 * line.trend->force_N.change_at_coarsest_se);
+  CHECK(convergenceFromJson(toJson(line)).trend->force_N.slope == Approx(line.trend->force_N.slope).epsilon(1e-12));
+  CHECK_THAT(markdown(line), Catch::Contains("A straight line in the step through all 16 runs of the 4 seeds"));
+
+  // A seed with one run carries no slope: one seed per fraction gives no trend.
+  CHECK_FALSE(summarize({point(0.1, 1, 7.0, 0.06, -1.5), point(0.05, 2, 7.0, 0.06, -1.5)}, "test").trend);
+}

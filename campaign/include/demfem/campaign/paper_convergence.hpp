@@ -29,6 +29,15 @@
 //   F(dt) = F0 + C dt^p (Richardson): order p = log2(1 / r), F0 = finest mean - c2 r / (1 - r).
 //   Otherwise none: a change the seeds cannot resolve, or one that does not shrink, says nothing of
 //   the limit.
+// - Trend: the least-squares slope of each of the three numbers against the step (per unit of
+//   dt fraction) through every finished run of the seeds finished at two fractions or more, each
+//   seed's own mean removed (one level per packing: the pairing of the changes, extended to all
+//   fractions at once), with its standard error from the residuals (runs - seeds - 1 degrees of
+//   freedom; none with fewer than one). `change_at_coarsest` = slope x (coarsest - finest
+//   fraction): what a straight line through all the runs says the step moves between the two ends.
+//   It pools every run, so a fraction whose paired change is a fluke of few seeds (a step bias
+//   grows with the step, a fluke need not) does not decide it alone; the verdict above is not
+//   changed by it.
 // - markdown(): the table and the verdict, for the bench's output and the report.
 #pragma once
 
@@ -70,6 +79,17 @@ struct ForceExtrapolation {
   double force_N = 0;        // F0
 };
 
+// One number's straight line in the step over all runs (see contract).
+struct StepTrend {
+  double slope = 0, slope_se = 0;  // per unit of dt fraction
+  double change_at_coarsest = 0, change_at_coarsest_se = 0;
+};
+
+struct StepTrends {
+  std::size_t runs = 0, seeds = 0;
+  StepTrend force_N, deformation_mm, fit_b;
+};
+
 struct ConvergenceSummary {
   std::vector<ConvergencePoint> points;
   std::vector<FractionSummary> fractions;  // coarsest first
@@ -77,6 +97,7 @@ struct ConvergenceSummary {
   std::size_t scatter_seeds = 0;  // distinct seeds among the finished runs
   std::optional<double> converged_fraction;
   std::optional<ForceExtrapolation> force_extrapolation;
+  std::optional<StepTrends> trend;
   std::string reduced_case;  // what was run (bin, stroke, particles), for the table's caption
 };
 
