@@ -71,8 +71,8 @@ Modes resolvedModes(const ReducedModel& model, double dt_s, double max_omega_dt)
 }
 
 // out += a0 w0 + a1 w1 + a2 w2 + a3 w3 over `rows` entries, summed left to right (as Eigen's
-// expression would); compiled for AVX-512 and AVX2 too, chosen at run time.
-[[gnu::target_clones("avx512f", "avx2", "default")]] void addFour(double* __restrict out, const double* a0, const double* a1, const double* a2,
+// expression would); compiled for AVX2 too, chosen at run time.
+[[gnu::target_clones("avx2", "default")]] void addFour(double* __restrict out, const double* a0, const double* a1, const double* a2,
                                                        const double* a3, const double (&w)[4], Eigen::Index rows) {
   for (Eigen::Index i = 0; i < rows; ++i) out[i] += a0[i] * w[0] + a1[i] * w[1] + a2[i] * w[2] + a3[i] * w[3];
 }
