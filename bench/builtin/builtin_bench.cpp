@@ -15,7 +15,10 @@
 // interleaved rounds (1 2 1 2 ...: a machine shared with other work slows all counts alike), with
 // the process CPU time beside the wall time. With --compete each count is also timed beside a
 // competing busy process (one more runnable process than the 2 cores hold), which is where a
-// spinning thread team collapses. Prints a table of every timing and the medians and ratios per
+// spinning thread team collapses. With --twin each round also times two copies of the 1-thread run in
+// two processes at once: the work of both over the time the slower took is what the machine's two
+// cores give when nothing is shared but the hardware (caches, memory, and on a VM whatever the host
+// shares), the ceiling for 2 threads. Prints a table of every timing and the medians and ratios per
 // round; --json FILE writes the figures (units in the keys) with the load average before and after.
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
@@ -107,6 +110,107 @@ struct Timing {
   double wall_s = 0, cpu_s = 0, rate = 0;
 };
 
+// How a variant runs: alone, beside a competing busy process, or as one of two 1-thread copies in
+// two processes at once (the ceiling for 2 threads).
+enum class Mode { Alone, BesideBusy, Twin };
+
+const char* modeName(Mode m) {
+  switch (m) {
+    case Mode::Alone: return "no";
+    case Mode::BesideBusy: return "yes";
+    case Mode::Twin: return "twin";
+  }
+  return "?";
+}
+
+const char* modeSentence(Mode m) {
+  switch (m) {
+    case Mode::Alone: return "";
+    case Mode::BesideBusy: return " beside a competing process";
+    case Mode::Twin: return " as two 1-thread processes at once (both counted)";
+  }
+  return "";
+}
+
+void writeAll(int fd, const void* data, std::size_t size) {
+  const char* p = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd, p, size);
+    if (n <= 0) throw std::runtime_error("--twin: pipe write failed");
+    p += n, size -= static_cast<std::size_t>(n);
+  }
+}
+
+void readAll(int fd, void* data, std::size_t size) {
+  char* p = static_cast<char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::read(fd, p, size);
+    if (n <= 0) throw std::runtime_error("--twin: the twin process ended without its timing");
+    p += n, size -= static_cast<std::size_t>(n);
+  }
+}
+
+// Times `steps` steps of `sim`, beside a competing busy process if `compete`: wall time and the
+// process CPU time of all its threads (the competitor is another process; on a shared machine wall
+// time also counts the waiting for a core).
+Timing timeRun(DemSimulation& sim, long steps, bool compete) {
+  std::unique_ptr<Competitor> competitor;
+  if (compete) competitor = std::make_unique<Competitor>();
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::clock_t c0 = std::clock();
+  sim.run(steps);
+  Timing t;
+  t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  t.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  t.rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
+  return t;
+}
+
+// Runs `steps` steps of `sim` (1 thread: no team threads to lose in the fork) here and in a forked
+// copy at the same moment; the wall time until both are done and the processor time of both.
+Timing runTwins(DemSimulation& sim, long steps) {
+  int go[2], result[2];
+  if (::pipe(go) != 0 || ::pipe(result) != 0) throw std::runtime_error("--twin: pipe failed");
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error("--twin: fork failed");
+  if (pid == 0) {  // the twin: wait for the start, run, send back wall and processor time
+    char start = 0;
+    double times[2] = {0, 0};
+    if (::read(go[0], &start, 1) == 1) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const std::clock_t c0 = std::clock();
+      sim.run(steps);
+      times[0] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      times[1] = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+      if (::write(result[1], times, sizeof times) != static_cast<ssize_t>(sizeof times)) ::_exit(1);
+    }
+    ::_exit(0);
+  }
+  ::close(go[0]);
+  ::close(result[1]);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::clock_t c0 = std::clock();
+  double twin[2] = {0, 0};
+  try {
+    writeAll(go[1], "g", 1);
+    sim.run(steps);
+    const double own_cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+    readAll(result[0], twin, sizeof twin);
+    Timing t;
+    t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    t.cpu_s = own_cpu + twin[1];
+    t.rate = 2 * static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
+    ::close(go[1]);
+    ::close(result[0]);
+    ::waitpid(pid, nullptr, 0);
+    return t;
+  } catch (...) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+    throw;
+  }
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
@@ -134,6 +238,8 @@ int main(int argc, char** argv) {
   app.add_option("--rounds", rounds, "Interleaved rounds: every thread count once per round")->check(CLI::PositiveNumber);
   bool compete = false;
   app.add_flag("--compete", compete, "Also time every thread count beside a competing busy process");
+  bool twin = false;
+  app.add_flag("--twin", twin, "Also time two 1-thread runs in two processes at once (the ceiling for 2 threads)");
   std::vector<std::string> only;
   app.add_option("--model", only, "Time only these models (labels as printed; default: all)");
   std::string& json_target = cli::addJsonOption(app);
@@ -215,37 +321,28 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < sim.particleCount(); ++i) states.push_back(sim.particle(i));
         origin = sim.mesh(m).offset(sim.time());
       }
-      // Interleaved rounds: every (threads, competitor) variant once per round, the same soil state.
-      std::vector<std::pair<int, bool>> variants;
-      for (const bool with_competitor : compete ? std::vector<bool>{false, true} : std::vector<bool>{false})
-        for (const int threads : thread_counts) variants.emplace_back(threads, with_competitor);
-      std::map<std::pair<int, bool>, std::vector<Timing>> timings;
+      // Interleaved rounds: every (threads, mode) variant once per round, the same soil state.
+      std::vector<std::pair<int, Mode>> variants;
+      for (const Mode mode : compete ? std::vector<Mode>{Mode::Alone, Mode::BesideBusy} : std::vector<Mode>{Mode::Alone})
+        for (const int threads : thread_counts) variants.emplace_back(threads, mode);
+      if (twin) variants.emplace_back(1, Mode::Twin);
+      std::map<std::pair<int, Mode>, std::vector<Timing>> timings;
       for (int round = 0; round < rounds; ++round)
-        for (const auto& [threads, with_competitor] : variants) {
+        for (const auto& [threads, mode] : variants) {
           DemSimulation sim = makeBin(st, states, threads, origin);
           sim.setTimeStep(physics::demTimeStep(st).step_s);
           sim.run(10);  // lists and first forces outside the timing
-          std::unique_ptr<Competitor> competitor;
-          if (with_competitor) competitor = std::make_unique<Competitor>();
-          const auto t0 = std::chrono::steady_clock::now();
-          const std::clock_t c0 = std::clock();
-          sim.run(steps);
-          Timing t;
-          t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          // Process CPU time of all threads (the competitor is another process): on a shared
-          // machine wall time also counts the waiting for a core.
-          t.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-          competitor.reset();
-          t.rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
-          timings[{threads, with_competitor}].push_back(t);
+          const Timing t = mode == Mode::Twin ? runTwins(sim, steps) : timeRun(sim, steps, mode == Mode::BesideBusy);
+          timings[{threads, mode}].push_back(t);
           if (text)
             std::printf("%-42s %9zu %7d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(),
-                        threads, with_competitor ? "yes" : "no", round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate,
-                        sim.bytesPerParticle(), sim.contactCount());
+                        threads, modeName(mode), round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate, sim.bytesPerParticle(),
+                        sim.contactCount());
           report["cases"].push_back({{"model", c.label},
                                      {"particles", sim.particleCount()},
                                      {"threads", threads},
-                                     {"competing_process", with_competitor},
+                                     {"competing_process", mode == Mode::BesideBusy},
+                                     {"twin_processes", mode == Mode::Twin},
                                      {"round", round + 1},
                                      {"dt_s", sim.timeStep()},
                                      {"wall_s", t.wall_s},
@@ -254,10 +351,12 @@ int main(int argc, char** argv) {
                                      {"bytes_per_particle", sim.bytesPerParticle()},
                                      {"contacts", sim.contactCount()}});
         }
-      // Per variant: median rate; against 1 thread of the same round (and competitor setting): the
-      // ratio per round, its median and its smallest value.
+      // Per variant: median rate; against the first thread count of the same round (beside the
+      // competitor for the variants beside it, alone for the rest): the ratio per round, its median
+      // and its smallest value.
       for (const auto& [variant, list] : timings) {
-        const auto& base = timings[{thread_counts.front(), variant.second}];
+        const Mode base_mode = variant.second == Mode::BesideBusy ? Mode::BesideBusy : Mode::Alone;
+        const auto& base = timings[{thread_counts.front(), base_mode}];
         std::vector<double> rates, ratios;
         for (std::size_t r = 0; r < list.size(); ++r) {
           rates.push_back(list[r].rate);
@@ -267,11 +366,11 @@ int main(int argc, char** argv) {
         if (text)
           std::printf("%s, %d thread(s)%s: median %.3e particle-steps/s; over %d thread(s) in the same round: median %.2fx, "
                       "lowest %.2fx\n",
-                      c.label.c_str(), variant.first, variant.second ? " beside a competing process" : "", med,
-                      thread_counts.front(), ratio, worst);
+                      c.label.c_str(), variant.first, modeSentence(variant.second), med, thread_counts.front(), ratio, worst);
         report["summary"].push_back({{"model", c.label},
                                      {"threads", variant.first},
-                                     {"competing_process", variant.second},
+                                     {"competing_process", variant.second == Mode::BesideBusy},
+                                     {"twin_processes", variant.second == Mode::Twin},
                                      {"median_particle_steps_per_s", med},
                                      {"median_ratio_to_first_thread_count", ratio},
                                      {"lowest_ratio_to_first_thread_count", worst}});
