@@ -80,19 +80,20 @@ int main(int argc, char** argv) {
     const double per_evaluation_s = (calibration_s - first_evaluations_s) / std::max(1, r.evaluations - 2);
     const double E = r.parameters[0].value.value_or(NAN), alpha = r.parameters[1].value.value_or(NAN);
 
-    std::printf("%-52s %14s\n", "quantity", "value");
-    std::printf("%-52s %14.3f\n", "first run, 0.5 kg: reduction + modes (s)", first_s);
-    std::printf("%-52s %14.3f\n", "first run, 1 kg: modes (s)", second_weight_s);
-    std::printf("%-52s %14.4f\n", "re-evaluation, both weights, model only (s)", rerun_s);
-    std::printf("%-52s %14.3f\n", "first two evaluations in the calibration (s)", first_evaluations_s);
-    std::printf("%-52s %14.4f\n", "later objective evaluation in the calibration (s)", per_evaluation_s);
-    std::printf("%-52s %14.2f\n", "whole calibration, --preset weight-drop (s)", calibration_s);
-    std::printf("%-52s %14d\n", "objective evaluations", r.evaluations);
-    std::printf("%-52s %14d\n", "model runs", r.model_runs);
-    std::printf("%-52s %14.4f\n", "E error (%)", 100 * (E / E_true - 1));
-    std::printf("%-52s %14.4f\n", "alpha error (%)", 100 * (alpha / alpha_true - 1));
-    std::printf("%-52s %14.4g\n", "E std dev (%)", 100 * r.parameters[0].std_dev / E);
-    std::printf("%-52s %14.4g\n", "alpha std dev (%)", 100 * r.parameters[1].std_dev / alpha);
+    std::FILE* const table = cli::textStream(json_target);
+    std::fprintf(table, "%-52s %14s\n", "quantity", "value");
+    std::fprintf(table, "%-52s %14.3f\n", "first run, 0.5 kg: reduction + modes (s)", first_s);
+    std::fprintf(table, "%-52s %14.3f\n", "first run, 1 kg: modes (s)", second_weight_s);
+    std::fprintf(table, "%-52s %14.4f\n", "re-evaluation, both weights, model only (s)", rerun_s);
+    std::fprintf(table, "%-52s %14.3f\n", "first two evaluations in the calibration (s)", first_evaluations_s);
+    std::fprintf(table, "%-52s %14.4f\n", "later objective evaluation in the calibration (s)", per_evaluation_s);
+    std::fprintf(table, "%-52s %14.2f\n", "whole calibration, --preset weight-drop (s)", calibration_s);
+    std::fprintf(table, "%-52s %14d\n", "objective evaluations", r.evaluations);
+    std::fprintf(table, "%-52s %14d\n", "model runs", r.model_runs);
+    std::fprintf(table, "%-52s %14.4f\n", "E error (%)", 100 * (E / E_true - 1));
+    std::fprintf(table, "%-52s %14.4f\n", "alpha error (%)", 100 * (alpha / alpha_true - 1));
+    std::fprintf(table, "%-52s %14.4g\n", "E std dev (%)", 100 * r.parameters[0].std_dev / E);
+    std::fprintf(table, "%-52s %14.4g\n", "alpha std dev (%)", 100 * r.parameters[1].std_dev / alpha);
     cli::writeJson(json_target, {{"study", study_file},
                                  {"first_run_s", first_s},
                                  {"second_weight_first_run_s", second_weight_s},

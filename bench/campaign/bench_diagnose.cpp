@@ -41,14 +41,14 @@ struct SoilOptions {
 };
 
 // The causes' table (printed) and JSON; the sum of their model runs.
-nlohmann::json causesTable(const campaign::Diagnosis& d, int& runs) {
-  std::printf("%-20s %10s %12s %14s %14s %12s\n", "cause", "runs", "wall (s)", "before (%)", "after (%)", "delta BIC");
+nlohmann::json causesTable(const campaign::Diagnosis& d, int& runs, std::FILE* table) {
+  std::fprintf(table, "%-20s %10s %12s %14s %14s %12s\n", "cause", "runs", "wall (s)", "before (%)", "after (%)", "delta BIC");
   nlohmann::json causes = nlohmann::json::array();
   runs = 0;
   for (const auto& c : d.ranking) {
     if (!c.fitted) continue;
     runs += c.model_runs;
-    std::printf("%-20s %10d %12.2f %14.2f %14.2f %12.1f\n", c.id.c_str(), c.model_runs, c.wall_time_s, c.error_before_percent,
+    std::fprintf(table, "%-20s %10d %12.2f %14.2f %14.2f %12.1f\n", c.id.c_str(), c.model_runs, c.wall_time_s, c.error_before_percent,
                 c.error_after_percent, c.delta_bic);
     causes.push_back({{"id", c.id},
                       {"model_runs", c.model_runs},
@@ -60,7 +60,7 @@ nlohmann::json causesTable(const campaign::Diagnosis& d, int& runs) {
   return causes;
 }
 
-nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, int jobs) {
+nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, int jobs, std::FILE* table) {
   const nlohmann::ordered_json study = cli::readJsonFile(study_file);
   nlohmann::ordered_json truth = study;
   const double k_true = clamp_ei_l * freePartEiOverL(study["tools"][0]);
@@ -87,9 +87,9 @@ nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, int 
   fs::remove_all(dir);
 
   int runs = 0;
-  const nlohmann::json causes = causesTable(d, runs);
-  std::printf("%-20s %10d %12.2f   (processor %.1f s, recordings %.1f s)\n", "whole diagnosis", runs, wall_s, cpu_s, recordings_s);
-  std::printf("named cause: %s\n", d.cause ? d.cause->c_str() : "no significant discrepancy");
+  const nlohmann::json causes = causesTable(d, runs, table);
+  std::fprintf(table, "%-20s %10d %12.2f   (processor %.1f s, recordings %.1f s)\n", "whole diagnosis", runs, wall_s, cpu_s, recordings_s);
+  std::fprintf(table, "named cause: %s\n", d.cause ? d.cause->c_str() : "no significant discrepancy");
   return {{"study", study_file},
           {"clamp_true_Nm_per_rad", k_true},
           {"jobs", jobs},
@@ -100,7 +100,7 @@ nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, int 
           {"causes", causes}};
 }
 
-nlohmann::json soilBin(const SoilOptions& o) {
+nlohmann::json soilBin(const SoilOptions& o, std::FILE* table) {
   campaign::test::LayeredBin bin = o.ci_bin ? campaign::test::LayeredBin{} : campaign::test::smallBin();
   bin.seeds = o.seeds, bin.jobs = o.jobs, bin.uniform_friction = o.uniform_friction;
   const fs::path out(o.out);
@@ -132,13 +132,13 @@ nlohmann::json soilBin(const SoilOptions& o) {
   const double load_after = bench::loadAverage();
 
   int runs = 0;
-  const nlohmann::json causes = causesTable(d, runs);
-  std::printf("baseline error %.2f %% (a correct model from the scatter alone: %.2f %%)\n", d.baseline_error_percent, d.noise_error_percent);
-  std::printf("named cause: %s (%s)\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str());
-  std::printf("%-40s %12s %12s\n", "step", "wall (s)", "CPU (s)");
-  std::printf("%-40s %12.0f %12.0f\n", "LIGGGHTS fixture", liggghts_s, liggghts_cpu_s);
-  std::printf("%-40s %12.0f %12.0f   (%d model runs in the fits)\n", "diagnosis", wall_s, cpu_s, runs);
-  std::printf("load average (1 min): %.2f before, %.2f after\n", load_before, load_after);
+  const nlohmann::json causes = causesTable(d, runs, table);
+  std::fprintf(table, "baseline error %.2f %% (a correct model from the scatter alone: %.2f %%)\n", d.baseline_error_percent, d.noise_error_percent);
+  std::fprintf(table, "named cause: %s (%s)\n", d.cause ? d.cause->c_str() : "no significant discrepancy", d.reason.c_str());
+  std::fprintf(table, "%-40s %12s %12s\n", "step", "wall (s)", "CPU (s)");
+  std::fprintf(table, "%-40s %12.0f %12.0f\n", "LIGGGHTS fixture", liggghts_s, liggghts_cpu_s);
+  std::fprintf(table, "%-40s %12.0f %12.0f   (%d model runs in the fits)\n", "diagnosis", wall_s, cpu_s, runs);
+  std::fprintf(table, "load average (1 min): %.2f before, %.2f after\n", load_before, load_after);
   return {{"bin_mm", {bin.width_m * 1000, bin.length_m * 1000, bin.fill_m * 1000}},
           {"stroke_mm", bin.stroke_m * 1000},
           {"depths_mm", bin.depths_mm},
@@ -185,7 +185,8 @@ int main(int argc, char** argv) {
   std::string& json_target = cli::addJsonOption(app);
   app.callback([&] {
     soil.jobs = jobs;
-    cli::writeJson(json_target, soil_bin ? soilBin(soil) : weightDrop(study_file, clamp_ei_l, jobs));
+    cli::writeJson(json_target, soil_bin ? soilBin(soil, cli::textStream(json_target))
+                                         : weightDrop(study_file, clamp_ei_l, jobs, cli::textStream(json_target)));
   });
   return cli::runApp(app, argc, argv);
 }

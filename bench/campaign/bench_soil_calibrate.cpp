@@ -58,22 +58,23 @@ std::size_t cachedRuns(const fs::path& dir) {
 
 // Per stage: the fitted parameters (against the deck's values when `deck` is given), evaluations,
 // runs and wall time; printed and returned.
-nlohmann::json stagesJson(const campaign::StagedCalibration& c, const nlohmann::ordered_json& study, const std::map<std::string, double>* deck) {
+nlohmann::json stagesJson(const campaign::StagedCalibration& c, const nlohmann::ordered_json& study, const std::map<std::string, double>* deck,
+                          std::FILE* table) {
   nlohmann::json out = nlohmann::json::array();
   for (std::size_t k = 0; k < c.results.size(); ++k) {
     const auto& r = c.results[k];
     nlohmann::json parameters = nlohmann::json::array();
     for (const auto& p : r.parameters) {
       nlohmann::json row = {{"pointer", p.spec.pointer}, {"fitted", p.best}, {"std_dev", p.std_dev}, {"identified", p.identified}};
-      std::printf("  %-36s", p.spec.pointer.c_str());
+      std::fprintf(table, "  %-36s", p.spec.pointer.c_str());
       if (deck) {
         row["true"] = deckValue(study, p.spec.pointer, *deck);
-        std::printf(" true %6.3f ", row["true"].get<double>());
+        std::fprintf(table, " true %6.3f ", row["true"].get<double>());
       }
-      std::printf(" fitted %6.3f +- %-8.3g%s\n", p.best, p.std_dev, p.identified ? "" : " (unidentified)");
+      std::fprintf(table, " fitted %6.3f +- %-8.3g%s\n", p.best, p.std_dev, p.identified ? "" : " (unidentified)");
       parameters.push_back(row);
     }
-    std::printf("  stage %zu: %d evaluations, %d model runs, %d cache hits, %d failed, %.0f s wall\n", k + 1, r.evaluations, r.model_runs,
+    std::fprintf(table, "  stage %zu: %d evaluations, %d model runs, %d cache hits, %d failed, %.0f s wall\n", k + 1, r.evaluations, r.model_runs,
                 r.cache_hits, r.failed_runs, r.wall_time_s);
     out.push_back({{"title", c.stages[k].title},
                    {"parameters", parameters},
@@ -151,7 +152,8 @@ int main(int argc, char** argv) {
     const double load_after = bench::loadAverage();
 
     const auto layered = campaign::test::builtinStudy(bin, campaign::test::fixtureData("layered_bin.json"));
-    std::printf("--preset layered-soil (two layers; deck: tests/campaign/data/liggghts_layered_bin/materials.in)\n");
+    std::FILE* const table = cli::textStream(json_target);
+    std::fprintf(table, "--preset layered-soil (two layers; deck: tests/campaign/data/liggghts_layered_bin/materials.in)\n");
     nlohmann::json doc = {{"stroke_mm", bin.stroke_m * 1000},
                           {"bin_mm", {bin.width_m * 1000, bin.length_m * 1000, bin.fill_m * 1000}},
                           {"depths_mm", bin.depths_mm},
@@ -160,31 +162,31 @@ int main(int argc, char** argv) {
                           {"max_evaluations", max_evaluations},
                           {"model_seeds", model_seeds},
                           {"jobs", bin.jobs},
-                          {"layered_stages", stagesJson(o.layered, layered, &deck)}};
+                          {"layered_stages", stagesJson(o.layered, layered, &deck, table)}};
     if (o.single) {
-      std::printf("one layer fitted at the shallowest depth (no single true value: the deck has two layers)\n");
-      doc["single_layer_stages"] = stagesJson(*o.single, campaign::test::singleLayerStudy(bin, std::nullopt), nullptr);
+      std::fprintf(table, "one layer fitted at the shallowest depth (no single true value: the deck has two layers)\n");
+      doc["single_layer_stages"] = stagesJson(*o.single, campaign::test::singleLayerStudy(bin, std::nullopt), nullptr, table);
     }
     nlohmann::json depths = nlohmann::json::array();
-    std::printf("%-8s %22s %22s %22s\n", "depth", "LIGGGHTS draught (N)", "two layers (N)", o.single ? "one layer (N)" : "");
+    std::fprintf(table, "%-8s %22s %22s %22s\n", "depth", "LIGGGHTS draught (N)", "two layers (N)", o.single ? "one layer (N)" : "");
     for (const auto& d : o.depths) {
-      std::printf("%5.0f mm %14.3f +- %5.3f %14.3f +- %5.3f", d.depth_mm, d.liggghts.mean_N, d.liggghts.sd_N, d.calibrated.mean_N, d.calibrated.sd_N);
+      std::fprintf(table, "%5.0f mm %14.3f +- %5.3f %14.3f +- %5.3f", d.depth_mm, d.liggghts.mean_N, d.liggghts.sd_N, d.calibrated.mean_N, d.calibrated.sd_N);
       nlohmann::json row = {{"depth_mm", d.depth_mm}, {"liggghts", seedJson(d.liggghts)}, {"calibrated", seedJson(d.calibrated)}};
       if (d.single_layer) {
-        std::printf(" %14.3f +- %5.3f", d.single_layer->mean_N, d.single_layer->sd_N);
+        std::fprintf(table, " %14.3f +- %5.3f", d.single_layer->mean_N, d.single_layer->sd_N);
         row["single_layer"] = seedJson(*d.single_layer);
       }
-      std::printf("\n");
+      std::fprintf(table, "\n");
       depths.push_back(row);
     }
-    std::printf("%-52s %10s %12s %12s\n", "step", "runs", "wall (s)", "CPU (s)");
-    std::printf("%-52s %10d %12.0f %12.0f\n", "LIGGGHTS fixture (depositions + drags)", recordings_dir.empty() ? bin.seeds * static_cast<int>(1 + bin.depths_mm.size()) : 0, liggghts_s,
+    std::fprintf(table, "%-52s %10s %12s %12s\n", "step", "runs", "wall (s)", "CPU (s)");
+    std::fprintf(table, "%-52s %10d %12.0f %12.0f\n", "LIGGGHTS fixture (depositions + drags)", recordings_dir.empty() ? bin.seeds * static_cast<int>(1 + bin.depths_mm.size()) : 0, liggghts_s,
                 liggghts_cpu_s);
-    std::printf("%-52s %10s %12.0f %12s\n", "  calibration + prediction (two layers)", "", o.layered_wall_s, "");
-    if (o.single) std::printf("%-52s %10s %12.0f %12s\n", "  single layer fit + prediction", "", o.single_wall_s, "");
-    std::printf("%-52s %10zu %12.0f %12.0f\n", "built-in model runs (all of the above)", runs, model_s, model_cpu_s);
-    std::printf("%-52s %10s %12.0f %12.0f\n", "whole benchmark", "", bench::secondsSince(start), bench::cpuSeconds() - cpu_start);
-    std::printf("load average (1 min): %.2f before, %.2f after\n", load_before, load_after);
+    std::fprintf(table, "%-52s %10s %12.0f %12s\n", "  calibration + prediction (two layers)", "", o.layered_wall_s, "");
+    if (o.single) std::fprintf(table, "%-52s %10s %12.0f %12s\n", "  single layer fit + prediction", "", o.single_wall_s, "");
+    std::fprintf(table, "%-52s %10zu %12.0f %12.0f\n", "built-in model runs (all of the above)", runs, model_s, model_cpu_s);
+    std::fprintf(table, "%-52s %10s %12.0f %12.0f\n", "whole benchmark", "", bench::secondsSince(start), bench::cpuSeconds() - cpu_start);
+    std::fprintf(table, "load average (1 min): %.2f before, %.2f after\n", load_before, load_after);
     doc["depths"] = depths;
     doc["liggghts_wall_s"] = liggghts_s;
     doc["liggghts_cpu_s"] = liggghts_cpu_s;

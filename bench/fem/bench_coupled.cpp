@@ -270,7 +270,8 @@ int main(int argc, char** argv) {
       }
     fs::remove_all(scratch);
     nlohmann::json rows = nlohmann::json::array();
-    std::printf("%-6s %-10s %6s %10s %11s %10s %10s %10s %10s %12s %10s %9s\n", "FEM", "DEM", "steps", "set-up(s)", "open+close(s)",
+    std::FILE* const table = cli::textStream(json_target);
+    std::fprintf(table, "%-6s %-10s %6s %10s %11s %10s %10s %10s %10s %12s %10s %9s\n", "FEM", "DEM", "steps", "set-up(s)", "open+close(s)",
                 "DEM(ms)", "FEM(ms)", "proto(ms)", "output(ms)", "FEM+proto(%)", "output(%)", "cpu/wall");
     for (const auto& v : variants) {
       std::vector<double> setup, open_close, dem_ms, fem_ms, protocol_ms, outputs_ms, fem_share, outputs_share, cpu_per_wall;
@@ -286,7 +287,7 @@ int main(int argc, char** argv) {
         cpu_per_wall.push_back(c.process_cpu_s / c.total.wall_s);
       }
       const std::string placement = placementName(v.placement);
-      std::printf("%-6s %-10s %6lld %10.2f %11.2f %10.3f %10.4f %10.4f %10.4f %12.2f %10.2f %9.2f\n", v.integration.c_str(),
+      std::fprintf(table, "%-6s %-10s %6lld %10.2f %11.2f %10.3f %10.4f %10.4f %10.4f %12.2f %10.2f %9.2f\n", v.integration.c_str(),
                   placement.c_str(), static_cast<long long>(v.costs.front().steps), median(setup), median(open_close), median(dem_ms), median(fem_ms),
                   median(protocol_ms), median(outputs_ms), median(fem_share), median(outputs_share), median(cpu_per_wall));
       rows.push_back({{"integration", v.integration},

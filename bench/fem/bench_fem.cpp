@@ -121,21 +121,22 @@ int main(int argc, char** argv) {
     const auto loads = soilLikeLoads(reduced, depth_mm * 1e-3, steps);
     const auto [full_step, modal_step] = interleavedStepCost(integrator, modal, loads, rounds);
 
-    std::printf("%-34s %12s %12s\n", "quantity", tool_name.c_str(), "cpu");
-    std::printf("%-34s %12zu\n", "mesh nodes", full.mesh.nodes.size());
-    std::printf("%-34s %12d\n", "full DOFs", full.dofCount());
-    std::printf("%-34s %12d\n", "keypoints", reduced.keypointCount());
-    std::printf("%-34s %12d\n", "reduced DOFs", reduced.dofCount());
-    std::printf("%-34s %12zu\n", "free reduced DOFs", reduced.freeDofs().size());
-    std::printf("%-34s %12.3f %12.3f\n", "mesh + assembly (s)", assembly_s, assembly_cpu_s);
-    std::printf("%-34s %12.3f %12.3f\n", "substructuring Eq 11-15 (s)", reduction_s, reduction_cpu_s);
-    std::printf("%-34s %12.3f %12.3f\n", "integrator set-up, A1 factor (s)", integrator_setup_s, integrator_setup_cpu_s);
-    std::printf("%-34s %12.3f %12.3f\n", "modal set-up, modes + R (s)", modal_setup_s, modal_setup_cpu_s);
-    std::printf("%-34s %12d\n", "modes integrated (w dt <= 30)", modal.modeCount());
-    std::printf("%-34s %12.1f\n", "highest mode integrated (Hz)", modal.highestModeHz());
-    std::printf("%-34s %12.4f %12.4f\n", "full step, median (ms)", full_step.wall_ms, full_step.cpu_ms);
-    std::printf("%-34s %12.4f %12.4f\n", "modal step, median (ms)", modal_step.wall_ms, modal_step.cpu_ms);
-    std::printf("%-34s %12.1f %12.1f\n", "full / modal", full_step.wall_ms / modal_step.wall_ms, full_step.cpu_ms / modal_step.cpu_ms);
+    std::FILE* const table = demfem::cli::textStream(json_target);
+    std::fprintf(table, "%-34s %12s %12s\n", "quantity", tool_name.c_str(), "cpu");
+    std::fprintf(table, "%-34s %12zu\n", "mesh nodes", full.mesh.nodes.size());
+    std::fprintf(table, "%-34s %12d\n", "full DOFs", full.dofCount());
+    std::fprintf(table, "%-34s %12d\n", "keypoints", reduced.keypointCount());
+    std::fprintf(table, "%-34s %12d\n", "reduced DOFs", reduced.dofCount());
+    std::fprintf(table, "%-34s %12zu\n", "free reduced DOFs", reduced.freeDofs().size());
+    std::fprintf(table, "%-34s %12.3f %12.3f\n", "mesh + assembly (s)", assembly_s, assembly_cpu_s);
+    std::fprintf(table, "%-34s %12.3f %12.3f\n", "substructuring Eq 11-15 (s)", reduction_s, reduction_cpu_s);
+    std::fprintf(table, "%-34s %12.3f %12.3f\n", "integrator set-up, A1 factor (s)", integrator_setup_s, integrator_setup_cpu_s);
+    std::fprintf(table, "%-34s %12.3f %12.3f\n", "modal set-up, modes + R (s)", modal_setup_s, modal_setup_cpu_s);
+    std::fprintf(table, "%-34s %12d\n", "modes integrated (w dt <= 30)", modal.modeCount());
+    std::fprintf(table, "%-34s %12.1f\n", "highest mode integrated (Hz)", modal.highestModeHz());
+    std::fprintf(table, "%-34s %12.4f %12.4f\n", "full step, median (ms)", full_step.wall_ms, full_step.cpu_ms);
+    std::fprintf(table, "%-34s %12.4f %12.4f\n", "modal step, median (ms)", modal_step.wall_ms, modal_step.cpu_ms);
+    std::fprintf(table, "%-34s %12.1f %12.1f\n", "full / modal", full_step.wall_ms / modal_step.wall_ms, full_step.cpu_ms / modal_step.cpu_ms);
     demfem::cli::writeJson(json_target, {{"tool", tool_name},
                                          {"keypoint_spacing_mm", spacing_mm},
                                          {"mesh_nodes", full.mesh.nodes.size()},

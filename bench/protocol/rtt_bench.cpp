@@ -73,12 +73,13 @@ int main(int argc, char** argv) {
                                 measure("ipc", "ipc://" + (dir / "bench.ipc").string(), repetitions),
                                 measure("tcp", "tcp://127.0.0.1:*", repetitions)};
     std::filesystem::remove_all(dir);
-    std::printf("one exchange = get_node_forces + set_node_positions + simulate(0), 738 keypoints (%zu bytes each way per array)\n",
+    std::FILE* const table = cli::textStream(json);
+    std::fprintf(table, "one exchange = get_node_forces + set_node_positions + simulate(0), 738 keypoints (%zu bytes each way per array)\n",
                 static_cast<std::size_t>(738 * 3 * 8));
-    std::printf("%-9s %12s %12s %12s %12s\n", "transport", "median_us", "p90_us", "mean_us", "min_us");
+    std::fprintf(table, "%-9s %12s %12s %12s %12s\n", "transport", "median_us", "p90_us", "mean_us", "min_us");
     nlohmann::json rows = nlohmann::json::array();
     for (const auto& r : results) {
-      std::printf("%-9s %12.1f %12.1f %12.1f %12.1f\n", r.transport.c_str(), r.median_us, r.p90_us, r.mean_us, r.min_us);
+      std::fprintf(table, "%-9s %12.1f %12.1f %12.1f %12.1f\n", r.transport.c_str(), r.median_us, r.p90_us, r.mean_us, r.min_us);
       rows.push_back({{"transport", r.transport}, {"median_us", r.median_us}, {"p90_us", r.p90_us},
                       {"mean_us", r.mean_us}, {"min_us", r.min_us}});
     }

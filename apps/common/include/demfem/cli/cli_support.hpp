@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <stdexcept>
+#include <cstdio>
 #include <string>
 
 namespace demfem::cli {
@@ -48,6 +49,10 @@ void addAllowUnsettledSoilFlag(CLI::App& cmd, bool& allow);
 
 // False when `--json -` claimed standard output: then the command prints nothing else there.
 inline bool textOnStdout(const std::string& json_target) { return json_target != "-"; }
+
+// Where a command's table for people goes: standard output, or standard error when `--json -`
+// claimed standard output.
+inline std::FILE* textStream(const std::string& json_target) { return textOnStdout(json_target) ? stdout : stderr; }
 
 // Writes `doc` to `target` ("-" = stdout) atomically (temp file + rename). No-op if target empty.
 void writeJson(const std::string& target, const nlohmann::json& doc);

@@ -1,0 +1,96 @@
+// The benchmarks as their users run them, on a small bin: one JSON document on standard output with
+// --json -, holding figures consistent with their definitions (the rates are not checked: no timed
+// tests).
+#include "apps/process.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+
+using namespace demfem::testing;
+
+namespace {
+
+// studies/quick.json on a 140 x 80 mm bin (about 500 particles) with the 120 x 20 mm tool, a short stroke.
+fs::path smallStudy(const fs::path& dir) {
+  nlohmann::json study = shippedStudyJson("quick.json");
+  useSmallBin(study);
+  useSmallTool(study);
+  useShortStroke(study, 20);
+  return writeStudy(study, dir / "small.json");
+}
+
+nlohmann::json jsonStdout(const std::vector<std::string>& args, const fs::path& log_stem) {
+  Process p(args, log_stem);
+  const int status = p.wait(240s);
+  INFO(p.err());
+  REQUIRE(exitedOk(status));
+  nlohmann::json doc;
+  REQUIRE_NOTHROW(doc = nlohmann::json::parse(p.out()));
+  return doc;
+}
+
+}  // namespace
+
+TEST_CASE("builtin_bench --twin times two 1-thread processes and counts the work of both", "[bench]") {
+  const fs::path dir = freshDir("bench_builtin_twin");
+  constexpr int kSteps = 40;
+  const nlohmann::json doc = jsonStdout({BUILTIN_BENCH, "--study", smallStudy(dir).string(), "--soil-dir", (dir / "soil").string(),
+                                         "--steps", std::to_string(kSteps), "--rounds", "2", "--threads", "1", "2", "--twin",
+                                         "--model", "hooke+history+cdt", "--json", "-"},
+                                        dir / "builtin_bench");
+  std::vector<nlohmann::json> twins, alone_1;
+  for (const auto& c : doc.at("cases")) {
+    if (c.at("twin_processes").get<bool>()) twins.push_back(c);
+    if (!c.at("twin_processes").get<bool>() && !c.at("competing_process").get<bool>() && c.at("threads") == 1) alone_1.push_back(c);
+  }
+  REQUIRE(twins.size() == 2);  // one per round
+  REQUIRE(alone_1.size() == 2);
+  for (std::size_t r = 0; r < twins.size(); ++r) {
+    const auto& t = twins[r];
+    CHECK(t.at("threads") == 1);
+    CHECK(t.at("round") == r + 1);
+    // Both processes' work over the time until both were done.
+    const double both = 2.0 * t.at("particles").get<double>() * kSteps / t.at("wall_s").get<double>();
+    CHECK(t.at("particle_steps_per_s").get<double>() == Approx(both).epsilon(1e-12));
+    CHECK(t.at("cpu_s").get<double>() > 0);  // both processes' processor time
+  }
+  int twin_summaries = 0;
+  for (const auto& s : doc.at("summary"))
+    if (s.at("twin_processes").get<bool>()) {
+      ++twin_summaries;
+      // The ratio is against 1 thread alone in the same round.
+      std::vector<double> ratios{twins[0].at("particle_steps_per_s").get<double>() / alone_1[0].at("particle_steps_per_s").get<double>(),
+                                 twins[1].at("particle_steps_per_s").get<double>() / alone_1[1].at("particle_steps_per_s").get<double>()};
+      CHECK(s.at("lowest_ratio_to_first_thread_count").get<double>() == Approx(std::min(ratios[0], ratios[1])).epsilon(1e-12));
+    }
+  CHECK(twin_summaries == 1);
+}
+
+TEST_CASE("demfem-bench-coupled splits a coupled run into DEM, FEM step, protocol, outputs and its opening and closing",
+          "[bench]") {
+  const fs::path dir = freshDir("bench_coupled_split");
+  ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);  // inherited by the benchmark
+  constexpr int kSteps = 30;
+  const nlohmann::json doc = jsonStdout({COUPLED_BENCH, "--study", smallStudy(dir).string(), "--steps", std::to_string(kSteps),
+                                         "--rounds", "1", "--integrations", "modal", "--placements", "in-process", "remote",
+                                         "--json", "-"},
+                                        dir / "bench_coupled");
+  const auto& runs = doc.at("runs");
+  REQUIRE(runs.size() == 2);
+  for (const auto& r : runs) {
+    INFO(r.dump());
+    CHECK(r.at("steps") == kSteps);
+    CHECK(r.at("dem_per_step_ms").get<double>() > 0);
+    CHECK(r.at("fem_step_per_step_ms").get<double>() > 0);
+    CHECK(r.at("open_close_s").get<double>() >= 0);
+    const double fem_share = r.at("fem_and_protocol_wall_percent").get<double>();
+    CHECK(fem_share > 0);
+    CHECK(fem_share < 100);
+    CHECK(r.at("process_cpu_per_wall").get<double>() > 0);
+  }
+  CHECK(runs[0].at("dem") == "in-process");
+  CHECK(runs[0].at("protocol_per_step_ms").get<double>() == 0);  // nothing between the client and an in-process DEM
+  CHECK(runs[1].at("dem") == "remote");
+  CHECK(runs[1].at("outputs_inline_per_step_ms").get<double>() == 0);  // remote, the outputs run during the interval
+}
