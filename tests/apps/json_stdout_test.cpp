@@ -30,20 +30,6 @@ fs::path shortWeightDrop(const fs::path& dir) {
   return writeStudy(study, dir / "weight_drop_short.json");
 }
 
-// Runs `args`, requires exit status 0 and returns standard output parsed as one JSON document
-// (nlohmann::json::parse rejects anything before or after it).
-nlohmann::json jsonStdout(const std::vector<std::string>& args, const fs::path& log_stem) {
-  Process p(args, log_stem);
-  const int status = p.wait(240s);
-  INFO(p.err());
-  REQUIRE(exitedOk(status));
-  const std::string out = p.out();
-  INFO("standard output:\n" << out);
-  nlohmann::json doc;
-  REQUIRE_NOTHROW(doc = nlohmann::json::parse(out));
-  return doc;
-}
-
 }  // namespace
 
 TEST_CASE("demfem validate, deposit and run print one JSON document with --json -", "[apps]") {

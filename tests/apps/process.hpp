@@ -4,6 +4,7 @@
 #include "support/small_study.hpp"
 #include "support/temp_dir.hpp"
 
+#include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
 #include <fcntl.h>
@@ -91,6 +92,21 @@ class Process {
 };
 
 inline bool exitedOk(int status) { return WIFEXITED(status) && WEXITSTATUS(status) == 0; }
+
+// Runs `args`, requires exit status 0 within `limit` and returns standard output parsed as one JSON
+// document (nlohmann::json::parse rejects anything before or after it: `--json -` prints nothing else).
+inline nlohmann::json jsonStdout(const std::vector<std::string>& args, const fs::path& log_stem,
+                                 std::chrono::seconds limit = std::chrono::seconds(240)) {
+  Process p(args, log_stem);
+  const int status = p.wait(limit);
+  INFO(p.err());
+  REQUIRE(exitedOk(status));
+  const std::string out = p.out();
+  INFO("standard output:\n" << out);
+  nlohmann::json doc;
+  REQUIRE_NOTHROW(doc = nlohmann::json::parse(out));
+  return doc;
+}
 
 // Waits (bounded) until `file` exists, or `process` has exited.
 inline bool waitForFile(const fs::path& file, Process& process, std::chrono::milliseconds limit) {

@@ -10,16 +10,6 @@ using namespace demfem::testing;
 
 namespace {
 
-nlohmann::json jsonStdout(const std::vector<std::string>& args, const fs::path& log_stem) {
-  Process p(args, log_stem);
-  const int status = p.wait(600s);
-  INFO(p.err());
-  REQUIRE(exitedOk(status));
-  nlohmann::json doc;
-  REQUIRE_NOTHROW(doc = nlohmann::json::parse(p.out()));
-  return doc;
-}
-
 // studies/cpt.json on a 80 x 140 mm bin with 40 mm of soil (one layer of 20 mm, one of 20 mm) and
 // two cones pushed to 28 mm at 50 mm/s: a few hundred particles, seconds. Non-layered: the deep
 // layer has layer1's friction (as studies/cpt_unlayered.json).
@@ -67,7 +57,7 @@ TEST_CASE("demfem cpt reports CPR per study and compares it with measured profil
   const fs::path study = tinyCptStudy(dir);
   const auto doc = jsonStdout({app("demfem"), "cpt", study.string(), "--output", (dir / "cpt").string(), "--depth-step-mm", "2",
                                "--json", "-"},
-                              dir / "cpt");
+                              dir / "cpt", 600s);
   REQUIRE(doc["soils"].size() == 1);
   const auto& soil = doc["soils"][0];
   CHECK(soil["study"] == "cpt_tiny");
@@ -84,7 +74,7 @@ TEST_CASE("demfem cpt reports CPR per study and compares it with measured profil
   const auto again = jsonStdout({app("demfem"), "cpt", study.string(), "--output", (dir / "cpt2").string(), "--depth-step-mm", "2",
                                  "--measured", (dir / "cpt" / "profiles" / "cpt_tiny_cone1.csv").string(), "--measured",
                                  (dir / "cpt" / "profiles" / "cpt_tiny_cone2.csv").string(), "--no-plots", "--json", "-"},
-                                dir / "cpt2");
+                                dir / "cpt2", 600s);
   REQUIRE(again["comparisons"].size() == 1);
   CHECK(again["comparisons"][0]["within_measured_band"].get<double>() == 1.0);
   CHECK(again["comparisons"][0]["mean_relative_difference"].get<double>() == Approx(0).margin(1e-9));
@@ -106,7 +96,7 @@ TEST_CASE("demfem cpt --packing gives every study the packing study's particles 
   const fs::path layered = tinyCptStudy(dir, true), unlayered = tinyCptStudy(dir, false);
   const auto doc = jsonStdout({app("demfem"), "cpt", layered.string(), unlayered.string(), "--packing", unlayered.string(), "--output",
                                (dir / "cpt").string(), "--no-plots", "--json", "-"},
-                              dir / "cpt");
+                              dir / "cpt", 600s);
   REQUIRE(doc["soils"].size() == 2);
   // One packing, two frictions: the deeper layer's Table 4 friction resists more (Fig. 10's
   // finding; measured 8.6 against 2.3 kPa).
@@ -147,7 +137,7 @@ TEST_CASE("demfem soil-motion analyses the ParaView files of a coupled run", "[a
 
   const auto doc = jsonStdout({app("demfem"), "soil-motion", (dir / "run").string(), (dir / "run").string(), "--at-mm", "0", "--at-mm",
                                "10", "--out", (dir / "motion").string(), "--json", "-"},
-                              dir / "motion");
+                              dir / "motion", 600s);
   REQUIRE(doc["runs"].size() == 2);  // the same run twice, side by side
   const auto& r = doc["runs"][0];
   CHECK(r["tool"] == "PMMA");

@@ -20,16 +20,6 @@ fs::path smallStudy(const fs::path& dir) {
   return writeStudy(study, dir / "small.json");
 }
 
-nlohmann::json jsonStdout(const std::vector<std::string>& args, const fs::path& log_stem) {
-  Process p(args, log_stem);
-  const int status = p.wait(240s);
-  INFO(p.err());
-  REQUIRE(exitedOk(status));
-  nlohmann::json doc;
-  REQUIRE_NOTHROW(doc = nlohmann::json::parse(p.out()));
-  return doc;
-}
-
 }  // namespace
 
 TEST_CASE("builtin_bench --twin times two 1-thread processes and counts the work of both", "[bench]") {
