@@ -132,23 +132,8 @@ const char* modeSentence(Mode m) {
   return "";
 }
 
-void writeAll(int fd, const void* data, std::size_t size) {
-  const char* p = static_cast<const char*>(data);
-  while (size > 0) {
-    const ssize_t n = ::write(fd, p, size);
-    if (n <= 0) throw std::runtime_error("--twin: pipe write failed");
-    p += n, size -= static_cast<std::size_t>(n);
-  }
-}
-
-void readAll(int fd, void* data, std::size_t size) {
-  char* p = static_cast<char*>(data);
-  while (size > 0) {
-    const ssize_t n = ::read(fd, p, size);
-    if (n <= 0) throw std::runtime_error("--twin: the twin process ended without its timing");
-    p += n, size -= static_cast<std::size_t>(n);
-  }
-}
+// Processor time of every thread of this process so far.
+double processCpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
 // Times `steps` steps of `sim`, beside a competing busy process if `compete`: wall time and the
 // process CPU time of all its threads (the competitor is another process; on a shared machine wall
@@ -157,58 +142,53 @@ Timing timeRun(DemSimulation& sim, long steps, bool compete) {
   std::unique_ptr<Competitor> competitor;
   if (compete) competitor = std::make_unique<Competitor>();
   const auto t0 = std::chrono::steady_clock::now();
-  const std::clock_t c0 = std::clock();
+  const double c0 = processCpuSeconds();
   sim.run(steps);
   Timing t;
   t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  t.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  t.cpu_s = processCpuSeconds() - c0;
   t.rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
   return t;
 }
 
 // Runs `steps` steps of `sim` (1 thread: no team threads to lose in the fork) here and in a forked
-// copy at the same moment; the wall time until both are done and the processor time of both.
+// copy at the same moment: the wall time until both are done and the processor time of both.
 Timing runTwins(DemSimulation& sim, long steps) {
   int go[2], result[2];
   if (::pipe(go) != 0 || ::pipe(result) != 0) throw std::runtime_error("--twin: pipe failed");
   const pid_t pid = ::fork();
   if (pid < 0) throw std::runtime_error("--twin: fork failed");
-  if (pid == 0) {  // the twin: wait for the start, run, send back wall and processor time
+  if (pid == 0) {  // the twin: wait for the start, run, send back its processor time
     char start = 0;
-    double times[2] = {0, 0};
     if (::read(go[0], &start, 1) == 1) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const std::clock_t c0 = std::clock();
+      const double c0 = processCpuSeconds();
       sim.run(steps);
-      times[0] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      times[1] = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-      if (::write(result[1], times, sizeof times) != static_cast<ssize_t>(sizeof times)) ::_exit(1);
+      const double cpu_s = processCpuSeconds() - c0;
+      if (::write(result[1], &cpu_s, sizeof cpu_s) != static_cast<ssize_t>(sizeof cpu_s)) ::_exit(1);
     }
     ::_exit(0);
   }
   ::close(go[0]);
   ::close(result[1]);
   const auto t0 = std::chrono::steady_clock::now();
-  const std::clock_t c0 = std::clock();
-  double twin[2] = {0, 0};
-  try {
-    writeAll(go[1], "g", 1);
+  const double c0 = processCpuSeconds();
+  bool started = ::write(go[1], "g", 1) == 1;
+  double twin_cpu_s = 0;
+  Timing t;
+  if (started) {
     sim.run(steps);
-    const double own_cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-    readAll(result[0], twin, sizeof twin);
-    Timing t;
+    t.cpu_s = processCpuSeconds() - c0;
+    started = ::read(result[0], &twin_cpu_s, sizeof twin_cpu_s) == static_cast<ssize_t>(sizeof twin_cpu_s);
     t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    t.cpu_s = own_cpu + twin[1];
-    t.rate = 2 * static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
-    ::close(go[1]);
-    ::close(result[0]);
-    ::waitpid(pid, nullptr, 0);
-    return t;
-  } catch (...) {
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, nullptr, 0);
-    throw;
   }
+  ::close(go[1]);
+  ::close(result[0]);
+  if (!started) ::kill(pid, SIGKILL);
+  ::waitpid(pid, nullptr, 0);
+  if (!started) throw std::runtime_error("--twin: the twin process did not run or report its timing");
+  t.cpu_s += twin_cpu_s;
+  t.rate = 2 * static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
+  return t;
 }
 
 double median(std::vector<double> v) {

@@ -58,8 +58,17 @@ class Scope {
   Clock::time_point t0_ = Clock::now();
 };
 
-// Adds the wall time of every call to `calls`, and of the client's work that
-// advance() runs (the step's outputs) to `work` as well. advance() is forwarded as one call, so a
+// What the client's side of a coupling saw: the wall time inside its calls, of its own work run inside
+// advance() (the step's outputs), and between two advance calls (its FEM steps).
+struct ClientClocks {
+  Clocks calls, work;
+  Clocks between_advances;  // from each advance's return to the next advance's call
+  std::int64_t advances = 0;
+};
+
+// Adds the wall time of every call to `seen.calls`, of the client's work that advance() runs (the
+// step's outputs) to `seen.work` as well, and of the gaps between advance calls to
+// `seen.between_advances`. advance() is forwarded as one call, so a
 // remote proxy below still overlaps that work with the DEM's interval. Placed on the client's side
 // it times what the client waits for (in process, calls - work is the DEM's own time); on the
 // server's thread, the DEM's own time.
@@ -68,28 +77,26 @@ class TimedApi final : public adapter::ForwardingApi {
   explicit TimedApi(adapter::CouplingApi& inner) : ForwardingApi(inner) {}
   TimedApi(const TimedApi&) = delete;
   TimedApi& operator=(const TimedApi&) = delete;
-  Clocks calls, work;
-  Clocks between_advances;  // from each advance's return to the next advance's call: the client's steps
-  std::int64_t advances = 0;
+  ClientClocks seen;
 
-  adapter::BackendInfo info() override { Scope s(calls); return inner().info(); }
-  std::vector<adapter::GeometryInfo> geometries() override { Scope s(calls); return inner().geometries(); }
-  double time() override { Scope s(calls); return inner().time(); }
-  adapter::NodeArray nodePositions(const std::string& g) override { Scope s(calls); return inner().nodePositions(g); }
-  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { Scope s(calls); return inner().nodeForces(g, m); }
-  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { Scope s(calls); inner().setNodePositions(g, x); }
-  void simulate(double d) override { Scope s(calls); inner().simulate(d); }
+  adapter::BackendInfo info() override { Scope s(seen.calls); return inner().info(); }
+  std::vector<adapter::GeometryInfo> geometries() override { Scope s(seen.calls); return inner().geometries(); }
+  double time() override { Scope s(seen.calls); return inner().time(); }
+  adapter::NodeArray nodePositions(const std::string& g) override { Scope s(seen.calls); return inner().nodePositions(g); }
+  adapter::NodeArray nodeForces(const std::string& g, adapter::ForceMode m) override { Scope s(seen.calls); return inner().nodeForces(g, m); }
+  void setNodePositions(const std::string& g, const adapter::NodeArray& x) override { Scope s(seen.calls); inner().setNodePositions(g, x); }
+  void simulate(double d) override { Scope s(seen.calls); inner().simulate(d); }
   adapter::NodeArray advance(const std::string& g, const adapter::NodeArray& x, double d, adapter::ForceMode m,
                              const std::function<void()>& client_work) override {
     const auto entry = Clock::now();
-    if (advances > 0) between_advances.wall_s += std::chrono::duration<double>(entry - last_advance_end_).count();
-    ++advances;
+    if (seen.advances > 0) seen.between_advances.wall_s += std::chrono::duration<double>(entry - last_advance_end_).count();
+    ++seen.advances;
     adapter::NodeArray forces;
     {
-      Scope s(calls);
+      Scope s(seen.calls);
       forces = client_work ? inner().advance(g, x, d, m,
                                              [&] {
-                                               Scope w(work);
+                                               Scope w(seen.work);
                                                client_work();
                                              })
                            : inner().advance(g, x, d, m, {});
@@ -97,10 +104,10 @@ class TimedApi final : public adapter::ForwardingApi {
     last_advance_end_ = Clock::now();
     return forces;
   }
-  adapter::RigidMotion rigidMotion(const std::string& g) override { Scope s(calls); return inner().rigidMotion(g); }
-  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { Scope s(calls); inner().setRigidMotion(g, m); }
-  void checkpoint(const fs::path& f) override { Scope s(calls); inner().checkpoint(f); }
-  void restore(const fs::path& f) override { Scope s(calls); inner().restore(f); }
+  adapter::RigidMotion rigidMotion(const std::string& g) override { Scope s(seen.calls); return inner().rigidMotion(g); }
+  void setRigidMotion(const std::string& g, const adapter::RigidMotion& m) override { Scope s(seen.calls); inner().setRigidMotion(g, m); }
+  void checkpoint(const fs::path& f) override { Scope s(seen.calls); inner().checkpoint(f); }
+  void restore(const fs::path& f) override { Scope s(seen.calls); inner().restore(f); }
 
  private:
   Clock::time_point last_advance_end_;
@@ -117,19 +124,18 @@ struct RunCost {
   double reduction_s = 0;  // the driver's construction (Eq 11-15 and the integrator set-up)
   Clocks total;            // driver.run() on the client's thread
   double process_cpu_s = 0;  // processor time of every thread of this process during driver.run()
-  Clocks client;           // inside the coupling calls, seen from the client
-  Clocks client_work;      // the outputs the client runs inside advance()
-  Clocks between_advances; // the client's FEM steps (all but the first, which follows the opening)
-  std::int64_t advances = 0;
+  ClientClocks client;     // seen from the client (its FEM steps: all but the first, which follows the opening)
   Clocks dem;              // the DEM's own time where it runs (without the client's work)
   bool outputs_inline = true;
   double perStep_ms(double s) const { return 1e3 * s / static_cast<double>(steps); }
-  double femStepMean_s() const { return between_advances.wall_s / static_cast<double>(std::max<std::int64_t>(1, advances - 1)); }
+  double femStepMean_s() const {
+    return client.between_advances.wall_s / static_cast<double>(std::max<std::int64_t>(1, client.advances - 1));
+  }
   double femSteps_s() const { return femStepMean_s() * static_cast<double>(steps); }
-  double openClose_s() const { return std::max(0.0, total.wall_s - client.wall_s - between_advances.wall_s); }
+  double openClose_s() const { return std::max(0.0, total.wall_s - client.calls.wall_s - client.between_advances.wall_s); }
   double stepping_s() const { return total.wall_s - openClose_s(); }
-  double outputs_s() const { return outputs_inline ? client_work.wall_s : 0.0; }
-  double protocol_s() const { return std::max(0.0, client.wall_s - outputs_s() - dem.wall_s); }
+  double outputs_s() const { return outputs_inline ? client.work.wall_s : 0.0; }
+  double protocol_s() const { return std::max(0.0, client.calls.wall_s - outputs_s() - dem.wall_s); }
 };
 
 enum class Placement { InProcess, Remote };
@@ -144,8 +150,7 @@ std::string placementName(Placement p) {
 
 struct RemoteClocks {
   std::int64_t steps = 0;
-  Clocks calls, work, between_advances;  // the client's, around the proxy
-  std::int64_t advances = 0;
+  ClientClocks client;  // around the proxy
 };
 
 // The driver against `dem` served over ipc:// from a thread of this process (as demfem-dem serves it).
@@ -169,8 +174,7 @@ RemoteClocks runRemote(fem::CoupledDriver& driver, adapter::CouplingApi& dem, co
     adapter::RemoteProxy proxy(remote, &context);
     TimedApi client(proxy);
     clocks.steps = driver.run(client).steps;
-    clocks.calls = client.calls, clocks.work = client.work, clocks.between_advances = client.between_advances;
-    clocks.advances = client.advances;
+    clocks.client = client.seen;
     proxy.shutdown();
   } catch (...) {
     serving.join();
@@ -195,18 +199,16 @@ RunCost coupledRun(const study::Study& study, const fs::path& out, std::optional
     case Placement::InProcess: {
       TimedApi client(*backend);
       cost.steps = driver.run(client).steps;
-      cost.client = client.calls, cost.client_work = client.work;
-      cost.between_advances = client.between_advances, cost.advances = client.advances;
-      cost.dem = {client.calls.wall_s - client.work.wall_s};
+      cost.client = client.seen;
+      cost.dem = {client.seen.calls.wall_s - client.seen.work.wall_s};
       break;
     }
     case Placement::Remote: {
       TimedApi server(*backend);  // on the server's thread: the DEM's own time
       const RemoteClocks remote = runRemote(driver, server, out);
       cost.steps = remote.steps;
-      cost.client = remote.calls, cost.client_work = remote.work;
-      cost.between_advances = remote.between_advances, cost.advances = remote.advances;
-      cost.dem = server.calls;
+      cost.client = remote.client;
+      cost.dem = server.seen.calls;
       cost.outputs_inline = false;
       break;
     }
