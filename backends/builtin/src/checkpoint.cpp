@@ -2,6 +2,8 @@
 // can hold (docs/builtin-dem.md, "Performance design").
 #include "demfem/backends/builtin/simulation.hpp"
 
+#include "demfem/backends/physics/dem_assert.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -76,8 +78,9 @@ void DemSimulation::saveState(adapter::PayloadWriter& out) const {
   out.putVector(wc_mesh_);
   out.putVector(wc_tri_);
   out.putVector(near_plane_);
-  out.putVector(wall_contacts_);
-  out.putVector(wall_start_);
+  const WallContactList wall = wallContactList();
+  out.putVector(wall.contacts);
+  out.putVector(wall.start);
   out.putVector(plane_force_);
 }
 
@@ -131,10 +134,12 @@ DemSimulation DemSimulation::withState(adapter::PayloadReader& in) const {
   in.getVector(s.wc_mesh_);
   in.getVector(s.wc_tri_);
   in.getVector(s.near_plane_);
-  in.getVector(s.wall_contacts_);
-  in.getVector(s.wall_start_);
+  WallContactList wall;
+  in.getVector(wall.contacts);
+  in.getVector(wall.start);
   in.getVector(s.plane_force_);
-  s.checkRestoredAgainst(*this, in);
+  s.checkRestoredAgainst(*this, wall, in);
+  s.setWallContacts(wall);
   s.updateMeshBinNodes();
   return s;
 }
@@ -142,7 +147,8 @@ DemSimulation DemSimulation::withState(adapter::PayloadReader& in) const {
 // What the study fixes must equal the live simulation's; what evolves must be finite, sized to
 // the particles and meshes, and index only what exists. Nothing a corrupted but checksummed file
 // holds can then make a later step read out of bounds.
-void DemSimulation::checkRestoredAgainst(const DemSimulation& live, const adapter::PayloadReader& in) const {
+void DemSimulation::checkRestoredAgainst(const DemSimulation& live, const WallContactList& wall,
+                                         const adapter::PayloadReader& in) const {
   const std::size_t n = live.particleCount();
   const auto require = [&](bool ok, const char* what) {
     if (!ok) in.fail(what);
@@ -208,15 +214,16 @@ void DemSimulation::checkRestoredAgainst(const DemSimulation& live, const adapte
     require(wc_mesh_[c] >= 0 && static_cast<std::size_t>(wc_mesh_[c]) < meshes_.size() && wc_tri_[c] >= 0 &&
                 static_cast<std::size_t>(wc_tri_[c]) < meshes_[wc_mesh_[c]].triangles.size(),
             "a wall candidate names a mesh or triangle that does not exist");
-  require(isOffsets(wall_start_, n, wall_contacts_.size()), "wall contact offsets are inconsistent");
+  require(isOffsets(wall.start, n, wall.contacts.size()) && (!wall.start.empty() || wall.contacts.empty()),
+          "wall contact offsets are inconsistent");
   const std::size_t walls = planes_.size() + meshes_.size();
-  for (std::size_t c = 0; c < wall_contacts_.size(); ++c) {
-    const WallContact& wc = wall_contacts_[c];
+  for (std::size_t c = 0; c < wall.contacts.size(); ++c) {
+    const WallContact& wc = wall.contacts[c];
     require(wc.particle >= 0 && static_cast<std::size_t>(wc.particle) < n && wc.wall >= 0 &&
-                static_cast<std::size_t>(wc.wall) < walls && (c == 0 || wall_contacts_[c - 1].particle <= wc.particle),
+                static_cast<std::size_t>(wc.wall) < walls && (c == 0 || wall.contacts[c - 1].particle <= wc.particle),
             "a wall contact names a particle or wall that does not exist");
-    require(wall_start_.empty() || (static_cast<std::size_t>(wall_start_[wc.particle]) <= c &&
-                                    c < static_cast<std::size_t>(wall_start_[wc.particle + 1])),
+    require(wall.start.empty() || (static_cast<std::size_t>(wall.start[wc.particle]) <= c &&
+                                   c < static_cast<std::size_t>(wall.start[wc.particle + 1])),
             "a wall contact lies outside its particle's row");
     if (static_cast<std::size_t>(wc.wall) >= planes_.size())
       for (const auto node : wc.nodes)
@@ -226,5 +233,32 @@ void DemSimulation::checkRestoredAgainst(const DemSimulation& live, const adapte
 }
 
 void DemSimulation::loadState(adapter::PayloadReader& in) { *this = withState(in); }
+
+DemSimulation::WallContactList DemSimulation::wallContactList() const {
+  WallContactList list;
+  const bool found = std::all_of(part_.begin(), part_.end(), [](const PartState& p) { return !p.wall_start.empty(); });
+  if (!found) return list;  // before the first force evaluation (or after particles changed)
+  list.start.reserve(particleCount() + 1);
+  for (int p = 0; p < threads_; ++p) {
+    const auto offset = static_cast<std::int32_t>(list.contacts.size());
+    const auto& start = part_[p].wall_start;
+    DEMFEM_ASSERT(start.size() == rangeEnd(p) - rangeBegin(p) + 1);
+    for (std::size_t k = 0; k + 1 < start.size(); ++k) list.start.push_back(offset + start[k]);
+    list.contacts.insert(list.contacts.end(), part_[p].wall.begin(), part_[p].wall.end());
+  }
+  list.start.push_back(static_cast<std::int32_t>(list.contacts.size()));
+  return list;
+}
+
+void DemSimulation::setWallContacts(const WallContactList& list) {
+  dropWallContacts();
+  if (list.start.empty()) return;
+  for (int p = 0; p < threads_; ++p) {
+    PartState& part = part_[p];
+    const std::size_t lo = rangeBegin(p), hi = rangeEnd(p);
+    part.wall.assign(list.contacts.begin() + list.start[lo], list.contacts.begin() + list.start[hi]);
+    for (std::size_t i = lo; i <= hi; ++i) part.wall_start.push_back(list.start[i] - list.start[lo]);
+  }
+}
 
 }  // namespace demfem::builtin

@@ -194,19 +194,23 @@ void DemSimulation::pairLoop(int part) {
   DEMFEM_ASSERT(H == layout_.size);
   PartState& ts = part_[part];
   PairBatch& b = ts.batch;
-  // Part `part` owns rows [lo, hi); it writes particles [lo, window_end) only (half list: j > i),
-  // so its buffer is cleared and summed over that window alone.
+  // Part `part` owns rows [lo, hi); it writes particles [lo, window_end) only (half list: j > i).
+  // No other part writes f_ and t_ of [lo, hi) in this phase, so the sums of its own particles go
+  // there directly; those of the particles past hi go to its buffer, cleared and summed over
+  // [hi, window_end) alone (sumPairForces). One part (one thread) has no buffer.
   const std::size_t lo = rangeBegin(part), hi = rangeEnd(part), window_end = part_window_end_[part];
   DEMFEM_ASSERT(nb_start_.size() == n + 1 && window_end >= hi && window_end <= n);
-  double* F = f_.data();
-  double* Tq = t_.data();
+  double* const F = f_.data();
+  double* const Tq = t_.data();
+  double* Fpast = F;
+  double* Tpast = Tq;
   if (threads_ > 1) {
     ts.f.resize(3 * n);
     ts.t.resize(3 * n);
-    std::fill(ts.f.begin() + 3 * lo, ts.f.begin() + 3 * window_end, 0.0);
-    std::fill(ts.t.begin() + 3 * lo, ts.t.begin() + 3 * window_end, 0.0);
-    F = ts.f.data();
-    Tq = ts.t.data();
+    std::fill(ts.f.begin() + 3 * hi, ts.f.begin() + 3 * window_end, 0.0);
+    std::fill(ts.t.begin() + 3 * hi, ts.t.begin() + 3 * window_end, 0.0);
+    Fpast = ts.f.data();
+    Tpast = ts.t.data();
   }
   const auto M = static_cast<std::int32_t>(table_.materials.size());
   double local_max = 0;
@@ -266,11 +270,13 @@ void DemSimulation::pairLoop(int part) {
         if (b.delta[k] > overlapLimitFraction() * std::min(radius_[i], radius_[j]) && bad < 0) bad = static_cast<std::int64_t>(i);
         double* hist = nb_hist_.data() + static_cast<std::size_t>(b.slot[k]) * H;
         for (int c = 0; c < H; ++c) hist[c] = b.hist[c][k];
+        double* const Fj = j < hi ? F : Fpast;
+        double* const Tj = j < hi ? Tq : Tpast;
         for (int c = 0; c < 3; ++c) {
           fi[c] += b.f[c][k];
-          F[3 * j + c] -= b.f[c][k];
+          Fj[3 * j + c] -= b.f[c][k];
           ti[c] += b.ti[c][k];
-          Tq[3 * j + c] += b.tj[c][k];
+          Tj[3 * j + c] += b.tj[c][k];
         }
       }
       for (int c = 0; c < 3; ++c) {
@@ -284,16 +290,18 @@ void DemSimulation::pairLoop(int part) {
   ts.pair_bad = bad;
 }
 
-// With more than one part: each particle of this part's range adds the buffers of the parts
-// whose window holds it, in part order (the same sums for any partition of the particles).
+// With more than one part: each particle of this part's range adds the buffers of the earlier
+// parts whose window reaches it, in part order (its own part's sums are in f_ and t_ already).
 void DemSimulation::sumPairForces(int part) {
   if (threads_ == 1) return;
-  const std::size_t n = particleCount();
-  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
+  const std::size_t lo = rangeBegin(part);
+  std::size_t reach = lo;  // past it no earlier part's window
+  for (int t = 0; t < part; ++t) reach = std::max(reach, part_window_end_[t]);
+  for (std::size_t i = lo; i < std::min(reach, rangeEnd(part)); ++i) {
     double fs[3] = {f_[3 * i], f_[3 * i + 1], f_[3 * i + 2]};
     double tsum[3] = {t_[3 * i], t_[3 * i + 1], t_[3 * i + 2]};
-    for (int t = 0; t < threads_; ++t) {
-      if (i < n * t / threads_ || i >= part_window_end_[t]) continue;
+    for (int t = 0; t < part; ++t) {
+      if (i >= part_window_end_[t]) continue;
       for (int c = 0; c < 3; ++c) {
         fs[c] += part_[t].f[3 * i + c];
         tsum[c] += part_[t].t[3 * i + c];

@@ -59,6 +59,7 @@ int DemSimulation::addParticle(const ParticleState& p) {
   inv_inertia_.push_back(1.0 / (0.4 * m * p.radius * p.radius));
   material_.push_back(p.material);
   layer_.push_back(p.layer);
+  dropWallContacts();  // the parts' ranges move with the count
   lists_valid_ = false;
   return static_cast<int>(radius_.size() - 1);
 }
@@ -102,13 +103,12 @@ void DemSimulation::keepParticles(const std::vector<char>& keep) {
   nb_stiff_.clear();
   nb_hist_.clear();
   nb_touch_.clear();
-  wall_contacts_.clear();
-  wall_start_.clear();
+  dropWallContacts();
   lists_valid_ = false;
 }
 
 int DemSimulation::addPlane(const PlaneWall& wall) {
-  if (!wall_contacts_.empty()) throw std::logic_error("builtin DEM: walls must be added before contacts exist");
+  if (std::any_of(part_.begin(), part_.end(), [](const PartState& p) { return !p.wall.empty(); })) throw std::logic_error("builtin DEM: walls must be added before contacts exist");
   useMaterial(wall.material, false);
   PlaneWall p = wall;
   const double len = std::sqrt(p.normal[0] * p.normal[0] + p.normal[1] * p.normal[1] + p.normal[2] * p.normal[2]);
@@ -193,7 +193,7 @@ void DemSimulation::run(long steps) {
 // Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick, as phases
 // of the team with the serial work between them (docs/builtin-dem.md, "Threads on a shared
 // machine"). Each pass over the particles does all it can (the skin check and the force reset ride
-// on the drift, the health check on the second kick). A failure found in any part stops the step
+// on the drift, the second kick and its health check on the wall forces' phase). A failure found in any part stops the step
 // at the same point whichever part found it; it is raised after the phase.
 void DemSimulation::step() {
   const std::size_t n = particleCount();
@@ -206,7 +206,7 @@ void DemSimulation::step() {
     team_.forEachPart([&](int part) {
       for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) resetForce(i);
     });
-    contactForces();
+    contactForces(false);
     raiseFailure();
   }
   team_.forEachPart([&](int part) { drift(part); });
@@ -215,7 +215,7 @@ void DemSimulation::step() {
   updateMeshBinNodes();
   if (std::any_of(part_.begin(), part_.end(), [](const PartState& p) { return p.moved; }) || meshesMovedBeyondSkin())
     rebuildLists();
-  if (contactForces()) team_.forEachPart([&](int part) { kick(part); });
+  contactForces(true);
   raiseFailure();
 }
 
@@ -251,24 +251,22 @@ void DemSimulation::kick(int part) {
   }
 }
 
-// Pair forces, then (unless a pair overlap failed) wall forces; false if a contact failed.
-bool DemSimulation::contactForces() {
-  const auto failed = [&](std::int64_t PartState::*bad) {
-    return std::any_of(part_.begin(), part_.end(), [&](const PartState& p) { return p.*bad >= 0; });
-  };
+// Pair forces, then (unless a pair overlap failed) wall forces and, with then_kick, the second half
+// kick of each part whose wall contacts did not fail, in the same phase: a particle's force is
+// complete once its part has added the pair sums and its wall forces.
+void DemSimulation::contactForces(bool then_kick) {
   team_.forEachPart([&](int part) { pairForces(part); });
   max_overlap_ = std::max_element(part_.begin(), part_.end(), [](const PartState& a, const PartState& b) {
                    return a.pair_max < b.pair_max;
                  })->pair_max;
-  if (failed(&PartState::pair_bad)) return false;
+  if (std::any_of(part_.begin(), part_.end(), [](const PartState& p) { return p.pair_bad >= 0; })) return;
   team_.forEachPart([&](int part) {
     sumPairForces(part);
     wallForces(part);
+    if (then_kick && part_[part].wall_bad < 0) kick(part);
   });
-  gatherWallContacts();
   scatterWallForces();
   for (const auto& p : part_) max_overlap_ = std::max(max_overlap_, p.wall_max);
-  return !failed(&PartState::wall_bad);
 }
 
 void DemSimulation::resetFailures() {
@@ -375,7 +373,8 @@ Vec3 DemSimulation::angularMomentum() const {
 double DemSimulation::maxOverlap() const { return max_overlap_; }
 
 std::size_t DemSimulation::contactCount() const {
-  std::size_t c = wall_contacts_.size();
+  std::size_t c = 0;
+  for (const auto& part : part_) c += part.wall.size();
   for (auto t : nb_touch_) c += t;
   return c;
 }
@@ -385,10 +384,13 @@ std::size_t DemSimulation::bytesPerParticle() const {
   std::size_t b = 0;
   for (const auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_, &radius_, &mass_, &inv_mass_, &inv_inertia_}) b += a->capacity() * sizeof(double);
   b += (material_.capacity() + layer_.capacity() + nb_start_.capacity() + nb_j_.capacity() + wc_start_.capacity() +
-        wc_mesh_.capacity() + wc_tri_.capacity() + wall_start_.capacity()) * sizeof(std::int32_t);
+        wc_mesh_.capacity() + wc_tri_.capacity()) * sizeof(std::int32_t);
   b += nb_stiff_.capacity() * sizeof(ContactStiffness) + nb_hist_.capacity() * sizeof(double) + nb_touch_.capacity();
-  b += wall_contacts_.capacity() * sizeof(WallContact);
-  for (const auto& t : part_) b += (t.f.capacity() + t.t.capacity()) * sizeof(double);
+  for (const auto& t : part_) {
+    b += (t.f.capacity() + t.t.capacity()) * sizeof(double);
+    b += (t.wall.capacity() + t.wall_next.capacity()) * sizeof(WallContact);
+    b += (t.wall_start.capacity() + t.wall_start_next.capacity()) * sizeof(std::int32_t);
+  }
   return b / n;
 }
 

@@ -123,22 +123,19 @@ int DemSimulation::meshTouches(std::size_t i, WallTouch* touch, int nt) const {
 // History hand-over: an accepted touch continues the last step's contact of the same (wall,
 // feature), or else inherits the history of the one contact of the same wall that vanished in this
 // step when it is the one new contact of that wall (the particle slid onto a neighbouring feature).
-void DemSimulation::matchHistory(std::size_t i, const WallTouch* touch, int nt, const bool* accepted,
-                                 int* matched_old) const {
-  const bool have_old = wall_start_.size() == particleCount() + 1;
-  const std::int32_t o0 = have_old ? wall_start_[i] : 0, o1 = have_old ? wall_start_[i + 1] : 0;
-  DEMFEM_ASSERT(o0 <= o1 && static_cast<std::size_t>(o1) <= wall_contacts_.size());
+void DemSimulation::matchHistory(const WallContact* old, int n_old, const WallTouch* touch, int nt, const bool* accepted,
+                                 int* matched_old) {
   for (int a = 0; a < nt; ++a) {
     matched_old[a] = -1;
     if (!accepted[a]) continue;
-    for (std::int32_t o = o0; o < o1; ++o)
-      if (wall_contacts_[o].wall == touch[a].wall && wall_contacts_[o].key == touch[a].key) matched_old[a] = o;
+    for (int o = 0; o < n_old; ++o)
+      if (old[o].wall == touch[a].wall && old[o].key == touch[a].key) matched_old[a] = o;
   }
   for (int a = 0; a < nt; ++a) {
     if (!accepted[a] || matched_old[a] >= 0) continue;
     int vanished = -1, count = 0;
-    for (std::int32_t o = o0; o < o1; ++o) {
-      if (wall_contacts_[o].wall != touch[a].wall) continue;
+    for (int o = 0; o < n_old; ++o) {
+      if (old[o].wall != touch[a].wall) continue;
       bool still = false;
       for (int b = 0; b < nt; ++b) still = still || (accepted[b] && matched_old[b] == o);
       if (!still) {
@@ -159,15 +156,15 @@ int DemSimulation::wallMaterial(int wall) const {
 
 // The contact of a touch before its force: history and stiffness from the matched old contact, or
 // fresh (zero history, the stiffness of the particle-wall pair).
-DemSimulation::WallContact DemSimulation::openWallContact(std::size_t i, const WallTouch& t, int matched_old) const {
+DemSimulation::WallContact DemSimulation::openWallContact(std::size_t i, const WallTouch& t,
+                                                          const WallContact* matched_old) const {
   WallContact wc{};
   wc.particle = static_cast<std::int32_t>(i);
   wc.wall = t.wall;
   wc.key = t.key;
-  if (matched_old >= 0) {
-    const WallContact& old = wall_contacts_[matched_old];
-    std::memcpy(wc.hist, old.hist, sizeof(wc.hist));
-    wc.stiffness = old.stiffness;
+  if (matched_old) {
+    std::memcpy(wc.hist, matched_old->hist, sizeof(wc.hist));
+    wc.stiffness = matched_old->stiffness;
   } else {
     wc.stiffness = wallStiffness(static_cast<int>(i), wallMaterial(t.wall));
   }
@@ -196,27 +193,35 @@ void DemSimulation::wallForces(int part) {
   withModel(model_, [&]<study::NormalModel N, study::RollingModel R, bool Shear>() { wallLoop<N, R, Shear>(part); });
 }
 
-// The wall contacts of this part's particles, in particle order, into its own list; the forces
-// go to the particles at once, the reactions to the walls after the gathering (serial).
+// The wall contacts of this part's particles, in particle order, into its own list (the next
+// step's old contacts); the forces go to the particles at once, the reactions to the walls after
+// the phase (serial, scatterWallForces).
 template <study::NormalModel N, study::RollingModel R, bool Shear>
 void DemSimulation::wallLoop(int part) {
   PartState& ts = part_[part];
-  auto& out = ts.wall;
+  const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
+  const bool have_old = ts.wall_start.size() == hi - lo + 1;
+  auto& out = ts.wall_next;
   out.clear();
+  ts.wall_start_next.resize(hi - lo + 1);
   double local_max = 0;
   std::int64_t bad = -1;
   WallTouch touch[kMaxWallCandidates];
   bool accepted[kMaxWallCandidates];
   int matched_old[kMaxWallCandidates];
-  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
+  for (std::size_t i = lo; i < hi; ++i) {
+    ts.wall_start_next[i - lo] = static_cast<std::int32_t>(out.size());
+    if (!near_plane_[i] && wc_start_[i] == wc_start_[i + 1]) continue;  // most particles: no wall within reach
     const int nt = meshTouches(i, touch, planeTouches(i, touch, 0));
     DEMFEM_ASSERT(nt >= 0 && nt <= kMaxWallCandidates);
     if (nt == 0) continue;
     acceptDistinct(touch, nt, static_cast<int>(planes_.size()), radius_[i], accepted);
-    matchHistory(i, touch, nt, accepted, matched_old);
+    const WallContact* old = have_old ? ts.wall.data() + ts.wall_start[i - lo] : nullptr;
+    const int n_old = have_old ? ts.wall_start[i - lo + 1] - ts.wall_start[i - lo] : 0;
+    matchHistory(old, n_old, touch, nt, accepted, matched_old);
     for (int a = 0; a < nt; ++a) {
       if (!accepted[a]) continue;
-      WallContact wc = openWallContact(i, touch[a], matched_old[a]);
+      WallContact wc = openWallContact(i, touch[a], matched_old[a] >= 0 ? old + matched_old[a] : nullptr);
       const Vec3 vwall = wallVelocity(touch[a]);
       ContactKinematics k = contactKinematics<true>(touch[a].normal.data(), touch[a].dist, radius_[i], 0,
                                                     &v_[3 * i], &w_[3 * i], vwall.data(), nullptr);
@@ -240,23 +245,18 @@ void DemSimulation::wallLoop(int part) {
       out.push_back(wc);
     }
   }
+  ts.wall_start_next[hi - lo] = static_cast<std::int32_t>(out.size());
+  ts.wall.swap(ts.wall_next);
+  ts.wall_start.swap(ts.wall_start_next);
   ts.wall_max = local_max;
   ts.wall_bad = bad;
 }
 
-// The parts' contacts in particle order (the parts' ranges are ascending), with
-// their CSR offsets per particle.
-void DemSimulation::gatherWallContacts() {
-  const std::size_t n = particleCount();
-  if (threads_ == 1) {
-    wall_contacts_.swap(part_[0].wall);  // the old contacts' memory is reused next step
-  } else {
-    wall_contacts_.clear();
-    for (const auto& t : part_) wall_contacts_.insert(wall_contacts_.end(), t.wall.begin(), t.wall.end());
+void DemSimulation::dropWallContacts() {
+  for (auto& part : part_) {
+    part.wall.clear();
+    part.wall_start.clear();
   }
-  wall_start_.assign(n + 1, 0);
-  for (const auto& wc : wall_contacts_) ++wall_start_[wc.particle + 1];
-  for (std::size_t i = 0; i < n; ++i) wall_start_[i + 1] += wall_start_[i];
 }
 
 // Reactions on the walls: the force on each plane, and on each mesh node its barycentric share of
@@ -265,23 +265,24 @@ void DemSimulation::scatterWallForces() {
   const int P = static_cast<int>(planes_.size());
   for (auto& mf : mesh_force_) std::fill(mf.begin(), mf.end(), 0.0);
   for (auto& pf : plane_force_) pf = {0, 0, 0};
-  for (const auto& wc : wall_contacts_) {
-    if (wc.wall < P) {
-      for (int c = 0; c < 3; ++c) plane_force_[wc.wall][c] -= wc.force[c];
-      continue;
-    }
-    auto& mf = mesh_force_[wc.wall - P];
-    auto& mi = mesh_impulse_[wc.wall - P];
-    for (int q = 0; q < 3; ++q) {
-      if (wc.weights[q] == 0) continue;
-      DEMFEM_ASSERT(wc.nodes[q] >= 0 && 3 * static_cast<std::size_t>(wc.nodes[q]) < mf.size());
-      for (int c = 0; c < 3; ++c) {
-        const double f = -wc.force[c] * wc.weights[q];
-        mf[3 * wc.nodes[q] + c] += f;
-        mi[3 * wc.nodes[q] + c] += f * dt_;
+  for (const auto& part : part_)  // in particle order: the parts' ranges ascend
+    for (const auto& wc : part.wall) {
+      if (wc.wall < P) {
+        for (int c = 0; c < 3; ++c) plane_force_[wc.wall][c] -= wc.force[c];
+        continue;
+      }
+      auto& mf = mesh_force_[wc.wall - P];
+      auto& mi = mesh_impulse_[wc.wall - P];
+      for (int q = 0; q < 3; ++q) {
+        if (wc.weights[q] == 0) continue;
+        DEMFEM_ASSERT(wc.nodes[q] >= 0 && 3 * static_cast<std::size_t>(wc.nodes[q]) < mf.size());
+        for (int c = 0; c < 3; ++c) {
+          const double f = -wc.force[c] * wc.weights[q];
+          mf[3 * wc.nodes[q] + c] += f;
+          mi[3 * wc.nodes[q] + c] += f * dt_;
+        }
       }
     }
-  }
 }
 
 }  // namespace demfem::builtin

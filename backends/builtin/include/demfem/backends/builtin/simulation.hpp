@@ -194,7 +194,12 @@ class DemSimulation {
   // to the step; whichever thread runs the part uses it.
   struct PartState {
     std::vector<double> f, t;            // pair force buffers (more than one part)
-    std::vector<WallContact> wall;       // the wall contacts of its particles, in particle order
+    // The wall contacts of its particles at the last force evaluation, in particle order, with
+    // their CSR offsets over the part's particles (empty before the first). The wall loop builds
+    // the next ones in wall_next / wall_start_next from these and swaps: a part's contacts stay
+    // with the thread that ran it, never gathered into one array (docs/builtin-dem.md).
+    std::vector<WallContact> wall, wall_next;
+    std::vector<std::int32_t> wall_start, wall_start_next;
     std::vector<std::int32_t> rows;      // list build: the neighbours of its rows
     PairBatch batch;                     // pair loop: the touching contacts of a batch of rows
     double pair_max = 0, wall_max = 0;   // largest overlap of its pair and of its wall contacts
@@ -223,7 +228,8 @@ class DemSimulation {
   void step();
   void drift(int part);  // half kick, drift, skin check, force reset
   void kick(int part);   // half kick, health check
-  bool contactForces();  // pair and wall forces added to f_, t_; false if a contact failed
+  // Pair and wall forces added to f_, t_, then with then_kick the second half kick; failures recorded.
+  void contactForces(bool then_kick);
   void raiseFailure() const;  // throws BlowUp for the first failure the parts recorded
   void resetFailures();
   // neighbour_lists.cpp: linked cells, the half pair list, the wall candidates (broad search)
@@ -243,11 +249,21 @@ class DemSimulation {
   template <study::NormalModel N, study::RollingModel R, bool Shear> void wallLoop(int part);
   int planeTouches(std::size_t i, WallTouch* touch, int count) const;  // fine search: appends, returns the count
   int meshTouches(std::size_t i, WallTouch* touch, int count) const;
-  void matchHistory(std::size_t i, const WallTouch* touch, int count, const bool* accepted, int* matched_old) const;
-  WallContact openWallContact(std::size_t i, const WallTouch& touch, int matched_old) const;
+  // old: the particle's n_old contacts of the last step; matched_old[a] indexes them, -1 none.
+  static void matchHistory(const WallContact* old, int n_old, const WallTouch* touch, int count, const bool* accepted,
+                           int* matched_old);
+  WallContact openWallContact(std::size_t i, const WallTouch& touch, const WallContact* matched_old) const;
   Vec3 wallVelocity(const WallTouch& touch) const;
   int wallMaterial(int wall) const;
-  void gatherWallContacts();
+  // The wall contacts of all particles in particle order with CSR offsets over the particles (offsets
+  // empty before the first force evaluation): a checkpoint's form of the parts' lists.
+  struct WallContactList {
+    std::vector<WallContact> contacts;
+    std::vector<std::int32_t> start;
+  };
+  WallContactList wallContactList() const;
+  void setWallContacts(const WallContactList& list);  // into the parts' lists (checkpoint.cpp)
+  void dropWallContacts();  // no wall contact history: the particles changed
   void scatterWallForces();
   void resetForce(std::size_t i) {  // gravity (and settling damping) only: the start of every force evaluation
     for (int c = 0; c < 3; ++c) {
@@ -265,7 +281,7 @@ class DemSimulation {
   void useMaterial(int material, bool particle);
   [[noreturn]] void fail(std::size_t particle, const std::string& what) const;
   std::string wallOverlapCause(std::int64_t particle) const;  // the message of a wall overlap failure
-  void checkRestoredAgainst(const DemSimulation& live, const adapter::PayloadReader& in) const;
+  void checkRestoredAgainst(const DemSimulation& live, const WallContactList& wall, const adapter::PayloadReader& in) const;
 
   MaterialTable table_;
   study::ContactModel model_;
@@ -299,8 +315,6 @@ class DemSimulation {
   std::vector<std::int32_t> wc_start_;               // candidate (mesh, triangle) per particle (CSR)
   std::vector<std::int32_t> wc_mesh_, wc_tri_;
   std::vector<std::uint8_t> near_plane_;             // per particle: within reach of a plane wall
-  std::vector<WallContact> wall_contacts_;           // touching, sorted by particle
-  std::vector<std::int32_t> wall_start_;             // CSR offsets into wall_contacts_
   std::vector<std::vector<double>> mesh_force_, mesh_impulse_;
   std::vector<Vec3> plane_force_;
 
