@@ -108,7 +108,8 @@ void DemSimulation::keepParticles(const std::vector<char>& keep) {
 }
 
 int DemSimulation::addPlane(const PlaneWall& wall) {
-  if (std::any_of(part_.begin(), part_.end(), [](const PartState& p) { return !p.wall.empty(); })) throw std::logic_error("builtin DEM: walls must be added before contacts exist");
+  if (std::any_of(part_.begin(), part_.end(), [](const PartState& p) { return !p.wall.empty(); }))
+    throw std::logic_error("builtin DEM: walls must be added before contacts exist");
   useMaterial(wall.material, false);
   PlaneWall p = wall;
   const double len = std::sqrt(p.normal[0] * p.normal[0] + p.normal[1] * p.normal[1] + p.normal[2] * p.normal[2]);
@@ -193,8 +194,9 @@ void DemSimulation::run(long steps) {
 // Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick, as phases
 // of the team with the serial work between them (docs/builtin-dem.md, "Threads on a shared
 // machine"). Each pass over the particles does all it can (the skin check and the force reset ride
-// on the drift, the second kick and its health check on the wall forces' phase). A failure found in any part stops the step
-// at the same point whichever part found it; it is raised after the phase.
+// on the drift, the second kick and its health check on the wall forces' phase). A failure found
+// in any part stops the step at the same point whichever part found it; it is raised after the
+// phase.
 void DemSimulation::step() {
   const std::size_t n = particleCount();
   DEMFEM_ASSERT(x_.size() == 3 * n && v_.size() == 3 * n && w_.size() == 3 * n && f_.size() == 3 * n && t_.size() == 3 * n &&

@@ -123,8 +123,8 @@ int DemSimulation::meshTouches(std::size_t i, WallTouch* touch, int nt) const {
 // History hand-over: an accepted touch continues the last step's contact of the same (wall,
 // feature), or else inherits the history of the one contact of the same wall that vanished in this
 // step when it is the one new contact of that wall (the particle slid onto a neighbouring feature).
-void DemSimulation::matchHistory(const WallContact* old, int n_old, const WallTouch* touch, int nt, const bool* accepted,
-                                 int* matched_old) {
+void DemSimulation::matchHistory(const WallContact* old, int n_old, const WallTouch* touch, int nt,
+                                 const bool* accepted, int* matched_old) {
   for (int a = 0; a < nt; ++a) {
     matched_old[a] = -1;
     if (!accepted[a]) continue;

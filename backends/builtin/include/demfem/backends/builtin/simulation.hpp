@@ -281,7 +281,8 @@ class DemSimulation {
   void useMaterial(int material, bool particle);
   [[noreturn]] void fail(std::size_t particle, const std::string& what) const;
   std::string wallOverlapCause(std::int64_t particle) const;  // the message of a wall overlap failure
-  void checkRestoredAgainst(const DemSimulation& live, const WallContactList& wall, const adapter::PayloadReader& in) const;
+  void checkRestoredAgainst(const DemSimulation& live, const WallContactList& wall,
+                            const adapter::PayloadReader& in) const;
 
   MaterialTable table_;
   study::ContactModel model_;
