@@ -104,6 +104,7 @@ DemSimulation DemSimulation::withState(adapter::PayloadReader& in) const {
   in.get(s.max_overlap_);
   for (auto* a : {&s.x_, &s.v_, &s.w_, &s.f_, &s.t_, &s.x_build_, &s.radius_, &s.mass_, &s.inv_mass_, &s.inv_inertia_})
     in.getVector(*a);
+  s.list_min_radius_ = s.radius_.empty() ? 0.0 : *std::min_element(s.radius_.begin(), s.radius_.end());
   in.getVector(s.material_);
   in.getVector(s.layer_);
   in.getVector(s.used_);

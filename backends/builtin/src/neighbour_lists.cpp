@@ -70,6 +70,7 @@ void DemSimulation::buildCellGrid() {
   const double rmin = n ? *std::min_element(radius_.begin(), radius_.end()) : 0.0;
   const double rmax = n ? *std::max_element(radius_.begin(), radius_.end()) : 0.0;
   if (skin_ == 0) skin_ = 0.2 * rmin;  // fixed at the first build (part of the saved state)
+  list_min_radius_ = rmin;
   CellGrid& g = grid_;
   g.size = std::max(2 * rmax + skin_, 1e-6);
   Vec3 hi = domain_.lo;

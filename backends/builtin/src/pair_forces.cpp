@@ -212,7 +212,6 @@ void DemSimulation::pairLoop(int part) {
     Fpast = ts.f.data();
     Tpast = ts.t.data();
   }
-  const auto M = static_cast<std::int32_t>(table_.materials.size());
   double local_max = 0;
   std::int64_t bad = -1;
   for (std::size_t i0 = lo; i0 < hi;) {
@@ -220,36 +219,7 @@ void DemSimulation::pairLoop(int part) {
     std::size_t i1 = i0;
     while (i1 < hi && static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]) < kBatchContacts) ++i1;
     b.growTo(static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]));
-    // Their touching slots with their histories, written at the next free place whether touching or
-    // not and kept by advancing the count (no branch on the contact); a slot that stopped touching
-    // loses its history.
-    std::size_t count = 0;
-    for (std::size_t i = i0; i < i1; ++i) {
-      const double xi = x_[3 * i], yi = x_[3 * i + 1], zi = x_[3 * i + 2];
-      const double ri = radius_[i];
-      const std::int32_t law_row = material_[i] * M;
-      for (std::int32_t s = nb_start_[i]; s < nb_start_[i + 1]; ++s) {
-        const std::int32_t j = nb_j_[s];
-        DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < window_end);
-        const double* xj = &x_[3 * static_cast<std::size_t>(j)];
-        const double d[3] = {xi - xj[0], yi - xj[1], zi - xj[2]};
-        const double rs = ri + radius_[j];
-        const double r2 = norm2(d);
-        const std::uint8_t touching = r2 < rs * rs;
-        if (touching != nb_touch_[s]) [[unlikely]] {
-          nb_touch_[s] = touching;
-          if (!touching) std::fill_n(nb_hist_.data() + static_cast<std::size_t>(s) * H, H, 0.0);
-        }
-        b.slot[count] = s;
-        b.i[count] = static_cast<std::int32_t>(i);
-        b.j[count] = j;
-        b.law[count] = law_row + material_[j];
-        b.r2[count] = r2;
-        const double* stored = nb_hist_.data() + static_cast<std::size_t>(s) * H;
-        for (int c = 0; c < H; ++c) b.hist[c][count] = stored[c];
-        count += touching;
-      }
-    }
+    const std::size_t count = findTouching<H>(i0, i1, window_end, b);
     runVectorised([&]() DEMFEM_INLINE { distances(b.r2.data(), count, b.r.data(), b.rinv.data()); });
     const PairInputs in{x_.data(),     v_.data(),     w_.data(),     radius_.data(), inv_inertia_.data(),
                         table_.laws.data(), nb_stiff_.data(), b.slot.data(), b.i.data(),
@@ -259,35 +229,119 @@ void DemSimulation::pairLoop(int part) {
     });
     const double rolling_dt = rollingStep();
     runVectorised([&]() DEMFEM_INLINE { pairLaws<N, R, Shear>(model_, in, count, dt_, rolling_dt, b); });
-    // The forces to the particles in slot order (i's sums stay in registers over its row), the
-    // histories back to their slots.
-    std::size_t k = 0;
-    for (std::size_t i = i0; i < i1; ++i) {
-      double fi[3] = {0, 0, 0}, ti[3] = {0, 0, 0};
-      for (; k < count && b.slot[k] < nb_start_[i + 1]; ++k) {
-        const std::size_t j = static_cast<std::size_t>(b.j[k]);
-        if (b.delta[k] > local_max) local_max = b.delta[k];
-        if (b.delta[k] > overlapLimitFraction() * std::min(radius_[i], radius_[j]) && bad < 0) bad = static_cast<std::int64_t>(i);
-        double* hist = nb_hist_.data() + static_cast<std::size_t>(b.slot[k]) * H;
-        for (int c = 0; c < H; ++c) hist[c] = b.hist[c][k];
-        double* const Fj = j < hi ? F : Fpast;
-        double* const Tj = j < hi ? Tq : Tpast;
-        for (int c = 0; c < 3; ++c) {
-          fi[c] += b.f[c][k];
-          Fj[3 * j + c] -= b.f[c][k];
-          ti[c] += b.ti[c][k];
-          Tj[3 * j + c] += b.tj[c][k];
-        }
-      }
-      for (int c = 0; c < 3; ++c) {
-        F[3 * i + c] += fi[c];
-        Tq[3 * i + c] += ti[c];
-      }
-    }
+    const double batch_max = scatterBatch<H>(i0, i1, count, hi, b, F, Tq, Fpast, Tpast);
+    local_max = std::max(local_max, batch_max);
+    // The overlap limit, checked contact by contact only where the batch's largest overlap could
+    // exceed it (rarely): the first failing row in slot order, as a check of every contact finds.
+    if (bad < 0 && batch_max > overlapLimitFraction() * list_min_radius_) bad = firstOverlapFailure(count, b);
     i0 = i1;
   }
   ts.pair_max = local_max;
   ts.pair_bad = bad;
+}
+
+// The touching slots of rows [i0, i1) into the batch with their histories, written at the next
+// free place whether touching or not and kept by advancing the count (no branch on the contact); a
+// slot that stopped touching loses its history. The arrays are taken as local pointers once: a
+// store through one of them cannot then make the compiler reload the others every slot.
+template <int H>
+std::size_t DemSimulation::findTouching(std::size_t i0, std::size_t i1, [[maybe_unused]] std::size_t window_end,
+                                       PairBatch& b) {
+  const double* const x = x_.data();
+  const double* const radius = radius_.data();
+  const std::int32_t* const material = material_.data();
+  const std::int32_t* const start = nb_start_.data();
+  const std::int32_t* const nb_j = nb_j_.data();
+  std::uint8_t* const touch = nb_touch_.data();
+  double* const stored_hist = nb_hist_.data();
+  std::int32_t *const slot = b.slot.data(), *const bi = b.i.data(), *const bj = b.j.data(), *const law = b.law.data();
+  double* const r2_out = b.r2.data();
+  double* hist[H > 0 ? H : 1];
+  for (int c = 0; c < H; ++c) hist[c] = b.hist[c].data();
+  const auto M = static_cast<std::int32_t>(table_.materials.size());
+  std::size_t count = 0;
+  for (std::size_t i = i0; i < i1; ++i) {
+    const double xi = x[3 * i], yi = x[3 * i + 1], zi = x[3 * i + 2];
+    const double ri = radius[i];
+    const std::int32_t law_row = material[i] * M;
+    for (std::int32_t s = start[i]; s < start[i + 1]; ++s) {
+      const std::int32_t j = nb_j[s];
+      DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < window_end);
+      const double* xj = x + 3 * static_cast<std::size_t>(j);
+      const double d[3] = {xi - xj[0], yi - xj[1], zi - xj[2]};
+      const double rs = ri + radius[j];
+      const double r2 = norm2(d);
+      const std::uint8_t touching = r2 < rs * rs;
+      double* const slot_hist = stored_hist + static_cast<std::size_t>(s) * H;
+      if (touching != touch[s]) [[unlikely]] {
+        touch[s] = touching;
+        if (!touching) std::fill_n(slot_hist, H, 0.0);
+      }
+      slot[count] = s;
+      bi[count] = static_cast<std::int32_t>(i);
+      bj[count] = j;
+      law[count] = law_row + material[j];
+      r2_out[count] = r2;
+      for (int c = 0; c < H; ++c) hist[c][count] = slot_hist[c];
+      count += touching;
+    }
+  }
+  return count;
+}
+
+// The batch's forces to the particles in slot order (i's sums stay in registers over its row: F
+// and Tq for the part's own particles, Fpast and Tpast past its range), the histories back to their
+// slots. Returns the batch's largest overlap.
+template <int H>
+double DemSimulation::scatterBatch(std::size_t i0, std::size_t i1, std::size_t count, std::size_t hi, const PairBatch& b,
+                                   double* F, double* Tq, double* Fpast, double* Tpast) {
+  const std::int32_t* const start = nb_start_.data();
+  double* const stored_hist = nb_hist_.data();
+  const std::int32_t *const slot = b.slot.data(), *const bj = b.j.data();
+  const double* const delta = b.delta.data();
+  const double *const f0 = b.f[0].data(), *const f1 = b.f[1].data(), *const f2 = b.f[2].data();
+  const double *const ti0 = b.ti[0].data(), *const ti1 = b.ti[1].data(), *const ti2 = b.ti[2].data();
+  const double *const tj0 = b.tj[0].data(), *const tj1 = b.tj[1].data(), *const tj2 = b.tj[2].data();
+  const double* hist[H > 0 ? H : 1];
+  for (int c = 0; c < H; ++c) hist[c] = b.hist[c].data();
+  double batch_max = 0;
+  std::size_t k = 0;
+  for (std::size_t i = i0; i < i1; ++i) {
+    double fi[3] = {0, 0, 0}, ti[3] = {0, 0, 0};
+    for (; k < count && slot[k] < start[i + 1]; ++k) {
+      const std::size_t j = static_cast<std::size_t>(bj[k]);
+      if (delta[k] > batch_max) batch_max = delta[k];
+      double* const slot_hist = stored_hist + static_cast<std::size_t>(slot[k]) * H;
+      for (int c = 0; c < H; ++c) slot_hist[c] = hist[c][k];
+      double* const Fj = (j < hi ? F : Fpast) + 3 * j;
+      double* const Tj = (j < hi ? Tq : Tpast) + 3 * j;
+      fi[0] += f0[k];
+      fi[1] += f1[k];
+      fi[2] += f2[k];
+      Fj[0] -= f0[k];
+      Fj[1] -= f1[k];
+      Fj[2] -= f2[k];
+      ti[0] += ti0[k];
+      ti[1] += ti1[k];
+      ti[2] += ti2[k];
+      Tj[0] += tj0[k];
+      Tj[1] += tj1[k];
+      Tj[2] += tj2[k];
+    }
+    for (int c = 0; c < 3; ++c) {
+      F[3 * i + c] += fi[c];
+      Tq[3 * i + c] += ti[c];
+    }
+  }
+  return batch_max;
+}
+
+// The row of the batch's first contact (slot order) whose overlap exceeds the limit fraction of
+// the smaller radius, or -1.
+std::int64_t DemSimulation::firstOverlapFailure(std::size_t count, const PairBatch& b) const {
+  for (std::size_t k = 0; k < count; ++k)
+    if (b.delta[k] > overlapLimitFraction() * std::min(radius_[b.i[k]], radius_[b.j[k]])) return b.i[k];
+  return -1;
 }
 
 // With more than one part: each particle of this part's range adds the buffers of the earlier

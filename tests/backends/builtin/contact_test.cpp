@@ -379,6 +379,40 @@ TEST_CASE("a blow-up names the particle and the step", "[builtin]") {
                                         Catch::Contains("left the domain"));
 }
 
+// A small sphere shot into a large one fails in the step its overlap first passes half the smaller
+// radius (not the larger), named by the pair's lower index; the pair sits past 400 spheres without
+// contacts, so it lies in a later batch of rows and, with 2 threads, in the second part.
+TEST_CASE("a pair overlap beyond half the smaller radius names the lower particle in the step it happens", "[builtin]") {
+  for (int threads : {1, 2}) {
+    SoilParameters p;
+    DemSimulation sim(makeSoil(p), box(0.1), threads);
+    sim.setGravity({0, 0, 0});
+    for (int k = 0; k < 400; ++k)  // 3 kR apart: a gap of kR, beyond the list's reach
+      sim.addParticle({{-0.075 + 0.015 * (k % 10), -0.075 + 0.015 * (k / 10 % 10), -0.06 + 0.015 * (k / 100)},
+                       {0, 0, 0}, {0, 0, 0}, kR, 0, 0});
+    const double small = 0.5 * kR, speed = 20, dt = 1e-6;
+    sim.addParticle({{0, 0.08, 0}, {0, 0, 0}, {0, 0, 0}, kR, 0, 0});
+    sim.addParticle({{kR + small + 0.1e-3, 0.08, 0}, {-speed, 0, 0}, {0, 0, 0}, small, 0, 0});
+    sim.setTimeStep(dt);
+    double last_overlap = 0;
+    bool failed = false;
+    for (int step = 0; step < 1000 && !failed; ++step) {
+      try {
+        sim.run(1);
+        last_overlap = sim.maxOverlap();
+      } catch (const BlowUp& e) {
+        failed = true;
+        CHECK_THAT(e.what(), Catch::Contains("particle 400 ") && Catch::Contains("overlap with a neighbour exceeds"));
+      }
+    }
+    INFO(threads << " thread(s)");
+    REQUIRE(failed);
+    // The step before held an overlap within the limit and at most one step's approach short of it.
+    CHECK(last_overlap <= 0.5 * small);
+    CHECK(last_overlap > 0.5 * small - speed * dt);
+  }
+}
+
 // A particle driven into a tool surface beyond the overlap limit is reported against that surface,
 // with the two steps that can be too long (the coupling step on a deforming tool: docs/builtin-dem.md).
 TEST_CASE("a wall overlap blow-up names the tool surface and the coupling step", "[builtin]") {

@@ -244,6 +244,11 @@ class DemSimulation {
   // pair_forces.cpp and wall_forces.cpp: each a loop per contact model (template arguments)
   void pairForces(int part);
   template <study::NormalModel N, study::RollingModel R, bool Shear> void pairLoop(int part);
+  template <int H> std::size_t findTouching(std::size_t i0, std::size_t i1, std::size_t window_end, PairBatch& b);
+  template <int H>
+  double scatterBatch(std::size_t i0, std::size_t i1, std::size_t count, std::size_t hi, const PairBatch& b, double* F,
+                      double* Tq, double* Fpast, double* Tpast);
+  std::int64_t firstOverlapFailure(std::size_t count, const PairBatch& b) const;
   void sumPairForces(int part);
   void wallForces(int part);
   template <study::NormalModel N, study::RollingModel R, bool Shear> void wallLoop(int part);
@@ -294,6 +299,7 @@ class DemSimulation {
   double dt_ = 0, time_ = 0, rolling_step_s_ = 0;
   long step_ = 0;
   double skin_ = 0;
+  double list_min_radius_ = 0;  // the smallest radius at the last list build (overlap check, pair_forces.cpp)
   bool lists_valid_ = false;
 
   // particles (SoA; vectors xyz-interleaved)
