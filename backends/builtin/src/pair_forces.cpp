@@ -62,20 +62,22 @@ void runVectorised(const F& f) {
 }
 
 // What the loops over a batch read: the simulation's particle arrays, the pair laws, the list
-// slots' stiffness, and the batch's contacts (slot, i, j, law index; distance, inverse).
+// slots' stiffness, and the batch's contacts (slot, i, j, law index; centre difference x_i - x_j,
+// distance, inverse).
 struct PairInputs {
-  const double *x, *v, *w, *radius, *inv_inertia;
+  const double *v, *w, *radius, *inv_inertia;
   const PairLaw* laws;
   const ContactStiffness* stiffness;
   const std::int32_t *slot, *i, *j, *law;
-  const double *r, *rinv, *cohesion;
+  const double *d0, *d1, *d2, *r, *rinv, *cohesion;
 };
 
-// r = sqrt(r2), rinv = 1 / r for count contacts.
-[[gnu::always_inline]] inline void distances(const double* r2, std::size_t count, double* r, double* rinv) {
+// r = |d|, rinv = 1 / r for count contacts (d = x_i - x_j by component).
+[[gnu::always_inline]] inline void distances(const double* d0, const double* d1, const double* d2, std::size_t count,
+                                             double* r, double* rinv) {
   DEMFEM_INDEPENDENT_ITERATIONS
   for (std::size_t k = 0; k < count; ++k) {
-    r[k] = std::sqrt(r2[k]);
+    r[k] = std::sqrt(d0[k] * d0[k] + d1[k] * d1[k] + d2[k] * d2[k]);  // norm2's order
     rinv[k] = 1.0 / r[k];
   }
 }
@@ -112,9 +114,7 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
     const std::size_t i = static_cast<std::size_t>(in.i[k]), j = static_cast<std::size_t>(in.j[k]);
     const std::size_t s = static_cast<std::size_t>(in.slot[k]);
     const double rinv = in.rinv[k];
-    const double* x = in.x;
-    const double normal[3] = {(x[3 * i] - x[3 * j]) * rinv, (x[3 * i + 1] - x[3 * j + 1]) * rinv,
-                              (x[3 * i + 2] - x[3 * j + 2]) * rinv};
+    const double normal[3] = {in.d0[k] * rinv, in.d1[k] * rinv, in.d2[k] * rinv};
     ContactKinematics kin = contactKinematics<false>(normal, in.r[k], in.radius[i], in.radius[j], &in.v[3 * i], &in.w[3 * i],
                                                      &in.v[3 * j], &in.w[3 * j]);
     kin.wrel_norm = std::sqrt(norm2(kin.wrel));
@@ -177,8 +177,8 @@ const char* vectorIsaName(VectorIsa isa) {
 void PairBatch::growTo(std::size_t slots) {
   if (slot.size() >= slots) return;
   for (auto* a : {&slot, &i, &j, &law}) a->resize(slots);
-  for (auto* a : {&r2, &r, &rinv, &cohesion, &delta}) a->resize(slots);
-  for (auto* a : {f, ti, tj})
+  for (auto* a : {&r, &rinv, &cohesion, &delta}) a->resize(slots);
+  for (auto* a : {d, f, ti, tj})
     for (int c = 0; c < 3; ++c) a[c].resize(slots);
   for (auto& h : hist) h.resize(slots);
 }
@@ -220,10 +220,13 @@ void DemSimulation::pairLoop(int part) {
     while (i1 < hi && static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]) < kBatchContacts) ++i1;
     b.growTo(static_cast<std::size_t>(nb_start_[i1] - nb_start_[i0]));
     const std::size_t count = findTouching<H>(i0, i1, window_end, b);
-    runVectorised([&]() DEMFEM_INLINE { distances(b.r2.data(), count, b.r.data(), b.rinv.data()); });
-    const PairInputs in{x_.data(),     v_.data(),     w_.data(),     radius_.data(), inv_inertia_.data(),
-                        table_.laws.data(), nb_stiff_.data(), b.slot.data(), b.i.data(),
-                        b.j.data(),    b.law.data(),  b.r.data(),    b.rinv.data(),  b.cohesion.data()};
+    runVectorised([&]() DEMFEM_INLINE {
+      distances(b.d[0].data(), b.d[1].data(), b.d[2].data(), count, b.r.data(), b.rinv.data());
+    });
+    const PairInputs in{v_.data(),       w_.data(),       radius_.data(),  inv_inertia_.data(), table_.laws.data(),
+                        nb_stiff_.data(), b.slot.data(),   b.i.data(),      b.j.data(),          b.law.data(),
+                        b.d[0].data(),   b.d[1].data(),   b.d[2].data(),   b.r.data(),          b.rinv.data(),
+                        b.cohesion.data()};
     withCohesion(model_.cohesion, [&]<study::CohesionModel C>() {
       runVectorised([&]() DEMFEM_INLINE { pairCohesion<C>(in, count, b.cohesion.data()); });
     });
@@ -255,7 +258,7 @@ std::size_t DemSimulation::findTouching(std::size_t i0, std::size_t i1, [[maybe_
   std::uint8_t* const touch = nb_touch_.data();
   double* const stored_hist = nb_hist_.data();
   std::int32_t *const slot = b.slot.data(), *const bi = b.i.data(), *const bj = b.j.data(), *const law = b.law.data();
-  double* const r2_out = b.r2.data();
+  double *const d0 = b.d[0].data(), *const d1 = b.d[1].data(), *const d2 = b.d[2].data();
   double* hist[H > 0 ? H : 1];
   for (int c = 0; c < H; ++c) hist[c] = b.hist[c].data();
   const auto M = static_cast<std::int32_t>(table_.materials.size());
@@ -281,7 +284,9 @@ std::size_t DemSimulation::findTouching(std::size_t i0, std::size_t i1, [[maybe_
       bi[count] = static_cast<std::int32_t>(i);
       bj[count] = j;
       law[count] = law_row + material[j];
-      r2_out[count] = r2;
+      d0[count] = d[0];
+      d1[count] = d[1];
+      d2[count] = d[2];
       for (int c = 0; c < H; ++c) hist[c][count] = slot_hist[c];
       count += touching;
     }

@@ -84,12 +84,12 @@ struct ParticleState {
 struct WallTouch;  // a wall feature a particle touches (wall_forces.cpp)
 
 // The pair loop's touching contacts of a batch of rows as arrays, memory reused (pair_forces.cpp):
-// list slot, particles i (the row) and j, index of their PairLaw; squared distance, distance, its
-// inverse, cohesive force; the law's results (force on i, torques on i and j, overlap, the history
-// by its stored offset).
+// list slot, particles i (the row) and j, index of their PairLaw; centre difference x_i - x_j by
+// component, distance, its inverse, cohesive force; the law's results (force on i, torques on i and
+// j, overlap, the history by its stored offset).
 struct PairBatch {
   std::vector<std::int32_t> slot, i, j, law;
-  std::vector<double> r2, r, rinv, cohesion, delta;
+  std::vector<double> d[3], r, rinv, cohesion, delta;
   std::vector<double> f[3], ti[3], tj[3], hist[HistoryLayout::kMaxSize];
   void growTo(std::size_t slots);  // every array at least `slots` long (never shrinks)
 };
