@@ -205,8 +205,9 @@ void DemSimulation::step() {
   if (step_ == 0 || !lists_valid_) {  // forces of the initial state for the first half kick
     updateMeshBinNodes();
     rebuildLists();
+    const ForceReset reset = forceReset();
     team_.forEachPart([&](int part) {
-      for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) resetForce(i);
+      for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) reset(i, f_.data(), t_.data());
     });
     contactForces(false);
     raiseFailure();
@@ -221,36 +222,64 @@ void DemSimulation::step() {
   raiseFailure();
 }
 
+namespace {
+// Is particle i finite and inside the domain (the health check after the second half kick)?
+// Without branches, so that the kick's loop vectorises.
+bool healthy(const double* x, const double* v, const double* w, const Domain& domain, std::size_t i) {
+  bool ok = true;
+  for (int c = 0; c < 3; ++c) {
+    const double xc = x[3 * i + c];
+    ok &= std::isfinite(xc) & std::isfinite(v[3 * i + c]) & std::isfinite(w[3 * i + c]);
+    ok &= (xc >= domain.lo[c]) & (xc <= domain.hi[c]);
+  }
+  return ok;
+}
+}  // namespace
+
+// The arrays as local pointers and the largest move as a maximum, so that the loops have no
+// branch and vectorise (the same operations per particle as one after the other).
 void DemSimulation::drift(int part) {
-  const double half = 0.5 * dt_, lim2 = 0.25 * skin_ * skin_;
-  bool moved = false;
+  const double half = 0.5 * dt_, dt = dt_;
+  const ForceReset reset = forceReset();
+  double *const x = x_.data(), *const v = v_.data(), *const w = w_.data(), *const f = f_.data(), *const t = t_.data();
+  const double *const x_build = x_build_.data(), *const inv_mass = inv_mass_.data(), *const inv_inertia = inv_inertia_.data();
+  double max_d2 = 0;
   for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     double d2 = 0;
     for (int c = 0; c < 3; ++c) {
-      v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
-      w_[3 * i + c] += half * t_[3 * i + c] * inv_inertia_[i];
-      x_[3 * i + c] += dt_ * v_[3 * i + c];
-      const double d = x_[3 * i + c] - x_build_[3 * i + c];
+      v[3 * i + c] += half * f[3 * i + c] * inv_mass[i];
+      w[3 * i + c] += half * t[3 * i + c] * inv_inertia[i];
+      x[3 * i + c] += dt * v[3 * i + c];
+      const double d = x[3 * i + c] - x_build[3 * i + c];
       d2 += d * d;
     }
-    if (d2 > lim2) moved = true;
-    resetForce(i);
+    max_d2 = d2 > max_d2 ? d2 : max_d2;
+    reset(i, f, t);
   }
-  part_[part].moved = moved;
+  part_[part].moved = max_d2 > 0.25 * skin_ * skin_;
 }
 
 void DemSimulation::kick(int part) {
   const double half = 0.5 * dt_;
-  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
-    bool ok = true;
+  const Domain domain = domain_;
+  double *const v = v_.data(), *const w = w_.data();
+  const double *const x = x_.data(), *const f = f_.data(), *const t = t_.data();
+  const double *const inv_mass = inv_mass_.data(), *const inv_inertia = inv_inertia_.data();
+  const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
+  bool all = true;
+  for (std::size_t i = lo; i < hi; ++i) {
     for (int c = 0; c < 3; ++c) {
-      v_[3 * i + c] += half * f_[3 * i + c] * inv_mass_[i];
-      w_[3 * i + c] += half * t_[3 * i + c] * inv_inertia_[i];
-      ok = ok && std::isfinite(x_[3 * i + c]) && std::isfinite(v_[3 * i + c]) && std::isfinite(w_[3 * i + c]);
-      ok = ok && x_[3 * i + c] >= domain_.lo[c] && x_[3 * i + c] <= domain_.hi[c];
+      v[3 * i + c] += half * f[3 * i + c] * inv_mass[i];
+      w[3 * i + c] += half * t[3 * i + c] * inv_inertia[i];
     }
-    if (!ok && part_[part].kick_bad < 0) part_[part].kick_bad = static_cast<std::int64_t>(i);
+    all &= healthy(x, v, w, domain, i);
   }
+  if (all || part_[part].kick_bad >= 0) return;
+  for (std::size_t i = lo; i < hi; ++i)
+    if (!healthy(x, v, w, domain, i)) {
+      part_[part].kick_bad = static_cast<std::int64_t>(i);
+      return;
+    }
 }
 
 // Pair forces, then (unless a pair overlap failed) wall forces and, with then_kick, the second half

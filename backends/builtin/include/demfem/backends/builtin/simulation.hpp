@@ -270,17 +270,25 @@ class DemSimulation {
   void setWallContacts(const WallContactList& list);  // into the parts' lists (checkpoint.cpp)
   void dropWallContacts();  // no wall contact history: the particles changed
   void scatterWallForces();
-  void resetForce(std::size_t i) {  // gravity (and settling damping) only: the start of every force evaluation
-    for (int c = 0; c < 3; ++c) {
-      f_[3 * i + c] = mass_[i] * gravity_[c];
-      t_[3 * i + c] = 0;
-    }
-    if (damping_per_s_ > 0)
+  // Gravity (and settling damping) only: the start of every force evaluation. A copy of what it
+  // reads, so that a loop storing forces need not reload it for every particle.
+  struct ForceReset {
+    const double *mass, *v, *w, *inv_inertia;
+    Vec3 gravity;
+    double damping_per_s;
+    void operator()(std::size_t i, double* f, double* t) const {
       for (int c = 0; c < 3; ++c) {
-        f_[3 * i + c] -= damping_per_s_ * mass_[i] * v_[3 * i + c];
-        t_[3 * i + c] -= damping_per_s_ * w_[3 * i + c] / inv_inertia_[i];
+        f[3 * i + c] = mass[i] * gravity[c];
+        t[3 * i + c] = 0;
       }
-  }
+      if (damping_per_s > 0)
+        for (int c = 0; c < 3; ++c) {
+          f[3 * i + c] -= damping_per_s * mass[i] * v[3 * i + c];
+          t[3 * i + c] -= damping_per_s * w[3 * i + c] / inv_inertia[i];
+        }
+    }
+  };
+  ForceReset forceReset() const { return {mass_.data(), v_.data(), w_.data(), inv_inertia_.data(), gravity_, damping_per_s_}; }
   ContactStiffness wallStiffness(int i, int wall_material) const;
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
   void useMaterial(int material, bool particle);
