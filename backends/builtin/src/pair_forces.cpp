@@ -298,8 +298,8 @@ std::size_t DemSimulation::findTouching(std::size_t i0, std::size_t i1, [[maybe_
 // and Tq for the part's own particles, Fpast and Tpast past its range), the histories back to their
 // slots. Returns the batch's largest overlap.
 template <int H>
-double DemSimulation::scatterBatch(std::size_t i0, std::size_t i1, std::size_t count, std::size_t hi, const PairBatch& b,
-                                   double* F, double* Tq, double* Fpast, double* Tpast) {
+double DemSimulation::scatterBatch(std::size_t i0, std::size_t i1, std::size_t count, std::size_t hi,
+                                   const PairBatch& b, double* F, double* Tq, double* Fpast, double* Tpast) {
   const std::int32_t* const start = nb_start_.data();
   double* const stored_hist = nb_hist_.data();
   const std::int32_t *const slot = b.slot.data(), *const bj = b.j.data();

@@ -224,7 +224,7 @@ void DemSimulation::step() {
 
 namespace {
 // Is particle i finite and inside the domain (the health check after the second half kick)?
-// Without branches, so that the kick's loop vectorises.
+// Without branches: no jump per particle and component in the kick's loop.
 bool healthy(const double* x, const double* v, const double* w, const Domain& domain, std::size_t i) {
   bool ok = true;
   for (int c = 0; c < 3; ++c) {
@@ -236,13 +236,14 @@ bool healthy(const double* x, const double* v, const double* w, const Domain& do
 }
 }  // namespace
 
-// The arrays as local pointers and the largest move as a maximum, so that the loops have no
-// branch and vectorise (the same operations per particle as one after the other).
+// The arrays as local pointers, which a store of a force cannot change (no reload per particle),
+// and the largest move as a maximum instead of a branch per particle.
 void DemSimulation::drift(int part) {
   const double half = 0.5 * dt_, dt = dt_;
   const ForceReset reset = forceReset();
   double *const x = x_.data(), *const v = v_.data(), *const w = w_.data(), *const f = f_.data(), *const t = t_.data();
-  const double *const x_build = x_build_.data(), *const inv_mass = inv_mass_.data(), *const inv_inertia = inv_inertia_.data();
+  const double *const x_build = x_build_.data(), *const inv_mass = inv_mass_.data();
+  const double* const inv_inertia = inv_inertia_.data();
   double max_d2 = 0;
   for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
     double d2 = 0;

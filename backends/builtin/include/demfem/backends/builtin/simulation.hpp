@@ -288,7 +288,9 @@ class DemSimulation {
         }
     }
   };
-  ForceReset forceReset() const { return {mass_.data(), v_.data(), w_.data(), inv_inertia_.data(), gravity_, damping_per_s_}; }
+  ForceReset forceReset() const {
+    return {mass_.data(), v_.data(), w_.data(), inv_inertia_.data(), gravity_, damping_per_s_};
+  }
   ContactStiffness wallStiffness(int i, int wall_material) const;
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
   void useMaterial(int material, bool particle);
