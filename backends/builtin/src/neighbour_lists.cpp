@@ -34,27 +34,20 @@ bool DemSimulation::meshesMovedBeyondSkin() const {
   return false;
 }
 
-// The cells, the merge of the rows and the swap to the new list on the calling thread; the rows and
-// the history carry-over as phases of the team, each part on its own particles.
+// The cells, the row offsets and the swap to the new list on the calling thread; the rows and the
+// filling of the new list (slots, stiffness, carried-over history) as phases of the team, each part
+// on its own particles: a list build's serial share is O(particles), not O(slots).
 void DemSimulation::rebuildLists() {
   const std::size_t n = particleCount();
   buildCellGrid();
   team_.forEachPart([&](int part) { buildRows(part); });
-  build_j_.clear();
-  for (const auto& p : part_) build_j_.insert(build_j_.end(), p.rows.begin(), p.rows.end());
   for (std::size_t i = 0; i < n; ++i) build_start_[i + 1] += build_start_[i];
   sizeNextLists();
-  team_.forEachPart([&](int part) { carryHistory(part); });
+  part_window_end_.assign(threads_, 0);
+  team_.forEachPart([&](int part) { fillNextList(part); });
   nb_stiff_.swap(next_stiff_);
   nb_hist_.swap(next_hist_);
   nb_touch_.swap(next_touch_);
-  part_window_end_.assign(threads_, 0);
-  for (int p = 0; p < threads_; ++p) {
-    std::size_t end = rangeEnd(p);
-    for (std::int32_t s = build_start_[rangeBegin(p)]; s < build_start_[rangeEnd(p)]; ++s)
-      end = std::max(end, static_cast<std::size_t>(build_j_[s]) + 1);
-    part_window_end_[p] = end;
-  }
   nb_start_.swap(build_start_);
   nb_j_.swap(build_j_);
   DEMFEM_ASSERT(nb_start_.size() == n + 1 && nb_stiff_.size() == nb_j_.size());
@@ -127,35 +120,46 @@ void DemSimulation::buildRows(int part) {
   }
 }
 
-// The new list's per-slot arrays, sized before the parts fill them.
+// The new list's arrays at their size: every slot is written by fillNextList, so kept elements are
+// not cleared (resize, not assign: no pass over the slots here).
 void DemSimulation::sizeNextLists() {
-  next_stiff_.assign(build_j_.size(), ContactStiffness{});
-  next_hist_.assign(build_j_.size() * layout_.size, 0.0);
-  next_touch_.assign(build_j_.size(), 0);
+  const std::size_t slots = static_cast<std::size_t>(build_start_[particleCount()]);
+  build_j_.resize(slots);
+  next_stiff_.resize(slots);
+  next_hist_.resize(slots * layout_.size);
+  next_touch_.resize(slots);
 }
 
-// Stiffness per slot of the new list, and the history of the pairs the old list had (rows sorted
-// by j: one merge per row), over the part's own rows.
-void DemSimulation::carryHistory(int part) {
+// The part's rows placed at their offsets in the new list, with every slot's stiffness and its
+// history: the old list's for a pair it had (rows sorted by j: one merge per row), zero for a new
+// one. Also the part's window end: one past the highest particle its rows reach.
+void DemSimulation::fillNextList(int part) {
   const std::size_t n = particleCount();
   const int H = layout_.size;
   const bool carry = nb_start_.size() == n + 1;
-  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
+  const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
+  const std::int32_t* const rows = part_[part].rows.data();
+  const std::int32_t base = build_start_[lo];  // slot s is rows[s - base]
+  std::size_t window_end = hi;
+  for (std::size_t i = lo; i < hi; ++i) {
     std::int32_t o = carry ? nb_start_[i] : 0;
     const std::int32_t oend = carry ? nb_start_[i + 1] : 0;
     for (std::int32_t s = build_start_[i]; s < build_start_[i + 1]; ++s) {
-      const std::int32_t j = build_j_[s];
+      const std::int32_t j = rows[s - base];
       DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < n && (s == build_start_[i] || build_j_[s - 1] < j));
+      build_j_[s] = j;
+      window_end = std::max(window_end, static_cast<std::size_t>(j) + 1);
       const double ri = radius_[i], rj = radius_[j];
       const double mi = mass_[i], mj = mass_[j];
       next_stiff_[s] = contactStiffness(model_, table_.law(material_[i], material_[j]), ri * rj / (ri + rj), mi * mj / (mi + mj));
       while (o < oend && nb_j_[o] < j) ++o;
-      if (o < oend && nb_j_[o] == j) {
-        next_touch_[s] = nb_touch_[o];
-        for (int h = 0; h < H; ++h) next_hist_[static_cast<std::size_t>(s) * H + h] = nb_hist_[static_cast<std::size_t>(o) * H + h];
-      }
+      const bool had = o < oend && nb_j_[o] == j;
+      next_touch_[s] = had ? nb_touch_[o] : 0;
+      double* const h = &next_hist_[static_cast<std::size_t>(s) * H];
+      for (int k = 0; k < H; ++k) h[k] = had ? nb_hist_[static_cast<std::size_t>(o) * H + k] : 0.0;
     }
   }
+  part_window_end_[part] = window_end;
 }
 
 void DemSimulation::buildWallCandidates(const CellGrid& g) {

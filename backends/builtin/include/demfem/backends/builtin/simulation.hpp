@@ -237,7 +237,7 @@ class DemSimulation {
   void buildCellGrid();
   void buildRows(int part);
   void sizeNextLists();
-  void carryHistory(int part);
+  void fillNextList(int part);
   void buildWallCandidates(const CellGrid& grid);
   bool meshesMovedBeyondSkin() const;
   void updateMeshBinNodes();
