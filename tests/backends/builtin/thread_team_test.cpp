@@ -91,7 +91,7 @@ TEST_CASE("a team waits for a part that sleeps past the spin and wakes threads a
 // hold: the caller alone finishes a phase in microseconds, so after its first probes the team
 // leaves the phases to the caller, and its later probes of the whole team stop at their first phase.
 TEST_CASE("a team whose other threads slow the phases down leaves them to the caller", "[builtin]") {
-  constexpr int kPhases = 9000;  // three probes of the team: 128 + 128 + 4096, 128 + 1 + 4096, 128 + 1
+  constexpr int kPhases = 9000;  // two probes of the team: 128 + 128 + 4096, 128 + 1 + 8192
   ThreadTeam team(2, 2);
   const auto caller = std::this_thread::get_id();
   std::atomic<int> by_worker{0};
@@ -106,10 +106,10 @@ TEST_CASE("a team whose other threads slow the phases down leaves them to the ca
     });
   CHECK(runs[0] == kPhases);
   CHECK(runs[1] == kPhases);
-  // Probes of the whole team: the first 128 phases, then after each 128 + 4096 alone one until the
+  // Probes of the whole team: the first 128 phases, then after 128 + 4096 alone one until the
   // worker's first part (its 2 ms are longer than the caller's 128 phases; team phases whose parts
-  // the caller took both are fast and do not end it). At most 128 + 2 worker parts, where probes of
-  // 128 phases each give the worker about 384; the bound leaves room for a caller preempted during
+  // the caller took both are fast and do not end it). At most 128 + 1 worker parts, where probes of
+  // 128 phases each give the worker about 256; the bound leaves room for a caller preempted during
   // its own probe.
   CHECK(by_worker.load() <= 160);
   CHECK(team.phasesAlone() >= kPhases - 3 * 128);
@@ -119,37 +119,60 @@ namespace {
 
 // Phases run by a TeamModeChoice whose phases take `team` by the whole team and `alone` by the
 // caller alone; returns the phases the team ran.
-long teamPhases(TeamModeChoice& choice, long phases, std::chrono::nanoseconds team, std::chrono::nanoseconds alone) {
+long teamPhases(TeamModeChoice& choice, long phases, std::chrono::nanoseconds team, std::chrono::nanoseconds alone,
+                bool busy = false) {
   long by_team = 0;
   for (long k = 0; k < phases; ++k) {
     const bool caller_alone = choice.alone();
     by_team += !caller_alone;
-    choice.record(caller_alone ? alone : team);
+    choice.record(caller_alone ? alone : team, busy);
   }
   return by_team;
 }
 
 }  // namespace
 
-TEST_CASE("the team's choice runs the faster way and cuts the losing probe short", "[builtin]") {
+TEST_CASE("the team's choice runs the faster way, cuts the losing probe short and probes a winner ever more rarely",
+          "[builtin]") {
   using std::chrono::microseconds;
   constexpr long kProbe = TeamModeChoice::kProbePhases, kRun = TeamModeChoice::kRunPhases;
   SECTION("beside a busy process: the team's later probes stop at their first phase") {
     TeamModeChoice choice;
     // The team first (128), the caller alone wins (128 + 4096); then the caller alone is the
-    // incumbent (128) and the team's probe loses at its first 2 ms phase.
-    const long cycle1 = kProbe + kProbe + kRun, cycle2 = kProbe + 1 + kRun;
+    // incumbent (128) and the team's probe loses at its first 2 ms phase, before stretches of
+    // 2, 4 and 8 times 4096 phases.
+    const long cycle1 = kProbe + kProbe + kRun;
     CHECK(teamPhases(choice, cycle1, microseconds(2000), microseconds(10)) == kProbe);
-    CHECK(teamPhases(choice, 3 * cycle2, microseconds(2000), microseconds(10)) == 3);
-    CHECK(choice.phasesAlone() == cycle1 - kProbe + 3 * (cycle2 - 1));
+    long alone = cycle1 - kProbe;
+    for (const long stretch : {2 * kRun, 4 * kRun, 8 * kRun}) {
+      CHECK(teamPhases(choice, kProbe + 1 + stretch, microseconds(2000), microseconds(10)) == 1);
+      alone += kProbe + stretch;
+    }
+    CHECK(choice.phasesAlone() == alone);
   }
-  SECTION("on a quiet machine: the caller's probe stops once it is the slower") {
+  SECTION("on a quiet machine: the caller's probe stops once it is the slower; the stretches double up to 16 x 4096") {
     TeamModeChoice choice;
     // Team 6 us, alone 10 us a phase: the team's probe takes 768 us, the caller's loses at its 77th
     // phase (770 us).
-    const long alone_probe = 77, cycle = kProbe + alone_probe + kRun;
-    CHECK(teamPhases(choice, 4 * cycle, microseconds(6), microseconds(10)) == 4 * (kProbe + kRun));
-    CHECK(choice.phasesAlone() == 4 * alone_probe);
+    const long alone_probe = 77;
+    long team = 0;
+    for (const long stretch : {kRun, 2 * kRun, 4 * kRun, 8 * kRun, 16 * kRun, 16 * kRun}) {
+      team += kProbe + stretch;
+      CHECK(teamPhases(choice, kProbe + alone_probe + stretch, microseconds(6), microseconds(10)) == kProbe + stretch);
+    }
+    CHECK(teamPhases(choice, kProbe, microseconds(6), microseconds(10)) == kProbe);
+    CHECK(choice.alone());  // the next probe began after a stretch of 16 x 4096, not 32
+    CHECK(choice.phasesAlone() == 6 * alone_probe);
+  }
+  SECTION("a thread preempted during a long stretch ends it after 4096 phases") {
+    TeamModeChoice choice;
+    const long alone_probe = 77;
+    CHECK(teamPhases(choice, kProbe + alone_probe + kRun, microseconds(6), microseconds(10)) == kProbe + kRun);
+    CHECK(teamPhases(choice, kProbe + alone_probe, microseconds(6), microseconds(10)) == kProbe);
+    CHECK(teamPhases(choice, kRun - 1, microseconds(6), microseconds(10)) == kRun - 1);  // of 2 x 4096
+    CHECK(teamPhases(choice, 1, microseconds(6), microseconds(10), true) == 1);
+    CHECK(teamPhases(choice, kProbe, microseconds(6), microseconds(10)) == kProbe);
+    CHECK(choice.alone());  // the probe after the cut stretch
   }
   SECTION("a challenger that is faster over its whole probe takes over") {
     TeamModeChoice choice;

@@ -20,13 +20,16 @@
 //   busy), then sleeps in the kernel until woken, giving its core to whoever can use it.
 // - Team or caller alone: the team times a probe of kProbePhases phases run the way it runs now
 //   and one run the other way (by the whole team, or by the caller alone with the other threads
-//   asleep), the second cut short once it is the slower, and runs the next kRunPhases phases the
-//   faster way, then probes again. On a machine whose other cores are taken by other
+//   asleep), the second cut short once it is the slower, and runs a stretch of phases the faster
+//   way, then probes again: 4,096 phases after a change of way, twice the last stretch (up to
+//   65,536) while the same way keeps winning, 4,096 again once a thread of the team is preempted
+//   (TeamModeChoice). On a machine whose other cores are taken by other
 //   processes the caller alone is the faster, and the team then runs at one thread's speed
 //   instead of waiting for threads that have no core. The numbers do not change (see above).
 // - Copying a team makes a new team of the same size (a simulation's copy gets its own threads).
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -50,10 +53,14 @@ long involuntaryContextSwitches();
 // The way running now (the incumbent; the whole team at first) is timed over kProbePhases phases,
 // then the other way (the challenger) over as many, stopped as soon as it has taken longer in all
 // than the incumbent's probe: it has lost, and a challenger whose threads have no core costs one
-// slow phase, not a probe's worth. The faster way then runs the next kRunPhases phases.
+// slow phase, not a probe's worth. The faster way then runs the next stretch of phases: kRunPhases
+// after a change of way, twice the last stretch (at most kMaxRunPhases) after each probe the
+// incumbent won, so that a choice that keeps winning is probed ever more rarely. A phase recorded
+// as busy (a thread of the team was preempted lately: the machine changed) ends a stretch longer
+// than kRunPhases once kRunPhases of it have run.
 class TeamModeChoice {
  public:
-  static constexpr int kProbePhases = 128, kRunPhases = 4096;
+  static constexpr int kProbePhases = 128, kRunPhases = 4096, kMaxRunPhases = 16 * kRunPhases;
 
   bool alone() const {
     switch (stage_) {
@@ -64,7 +71,7 @@ class TeamModeChoice {
     return run_alone_;
   }
 
-  void record(std::chrono::nanoseconds phase) {
+  void record(std::chrono::nanoseconds phase, bool busy) {
     phases_alone_ += alone();
     spent_ += phase;
     ++phases_;
@@ -76,11 +83,17 @@ class TeamModeChoice {
         break;
       case Stage::ProbeChallenger:
         if (spent_ <= incumbent_ && phases_ < kProbePhases) return;
-        if (spent_ < incumbent_) run_alone_ = !run_alone_;
+        if (spent_ < incumbent_) {
+          run_alone_ = !run_alone_;
+          run_phases_ = kRunPhases;
+        } else {
+          run_phases_ = std::min(2 * run_phases_, kMaxRunPhases);
+        }
         stage_ = Stage::Run;
         break;
       case Stage::Run:
-        if (phases_ < kRunPhases) return;
+        if (busy) run_phases_ = kRunPhases;
+        if (phases_ < run_phases_) return;
         stage_ = Stage::ProbeIncumbent;
         break;
     }
@@ -95,6 +108,7 @@ class TeamModeChoice {
   Stage stage_ = Stage::ProbeIncumbent;
   bool run_alone_ = false;  // the incumbent
   int phases_ = 0;          // of the current stage
+  int run_phases_ = kRunPhases / 2;  // of the last stretch (the first is kRunPhases)
   long phases_alone_ = 0;
   std::chrono::nanoseconds spent_{0}, incumbent_{0};
 };
@@ -128,7 +142,7 @@ class ThreadTeam {
     } else {
       runTeamPhase(body);
     }
-    choice_.record(std::chrono::steady_clock::now() - began);
+    choice_.record(std::chrono::steady_clock::now() - began, machineBusy());
   }
 
   // Phases the caller ran alone so far (for tests and benchmarks).
@@ -201,10 +215,11 @@ class ThreadTeam {
   // with 10). A thread preempted at least kBusySwitches times within kCheckEvery waits marks the
   // machine busy for kBusyChecks looks (measured: about 1 preemption per 64 waits when quiet, 12
   // beside a busy process).
-  std::chrono::microseconds spinBudget() const {
+  std::chrono::microseconds spinBudget() const { return machineBusy() ? kSpinBusy : kSpinQuiet; }
+  bool machineBusy() const {
     for (const auto& b : busy_)
-      if (b.load(std::memory_order_relaxed)) return kSpinBusy;
-    return kSpinQuiet;
+      if (b.load(std::memory_order_relaxed)) return true;
+    return false;
   }
   void notePreemptions(int who) {
     Preemptions& p = preemptions_[static_cast<std::size_t>(who)];
