@@ -188,19 +188,20 @@ void DemSimulation::setSettlingDamping(double rate_per_s) {
 void DemSimulation::run(long steps) {
   if (steps <= 0) return;
   if (!(dt_ > 0)) throw std::logic_error("builtin DEM: run() before setTimeStep()");
-  for (long s = 0; s < steps; ++s) step();
+  for (long s = 0; s < steps; ++s) step(s + 1 < steps);
 }
 
 // Velocity Verlet (LAMMPS/LIGGGHTS nve/sphere): half kick and drift, forces, half kick, as phases
 // of the team with the serial work between them (docs/builtin-dem.md, "Threads on a shared
 // machine"). Each pass over the particles does all it can (the skin check and the force reset ride
-// on the drift, the second kick and its health check on the wall forces' phase). A failure found
-// in any part stops the step at the same point whichever part found it; it is raised after the
-// phase.
-void DemSimulation::step() {
+// on the drift, the second kick and its health check on the wall forces' phase, and within a run
+// the next step's drift too: two phases a step). A failure found in any part stops the step at the
+// same point whichever part found it; it is raised after the phase.
+void DemSimulation::step(bool drift_ahead) {
   const std::size_t n = particleCount();
   DEMFEM_ASSERT(x_.size() == 3 * n && v_.size() == 3 * n && w_.size() == 3 * n && f_.size() == 3 * n && t_.size() == 3 * n &&
                 x_build_.size() == 3 * n && inv_mass_.size() == n && inv_inertia_.size() == n);
+  DEMFEM_ASSERT(!drifted_ || (step_ > 0 && lists_valid_));
   resetFailures();
   if (step_ == 0 || !lists_valid_) {  // forces of the initial state for the first half kick
     updateMeshBinNodes();
@@ -209,17 +210,19 @@ void DemSimulation::step() {
     team_.forEachPart([&](int part) {
       for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) reset(i, f_.data(), t_.data());
     });
-    contactForces(false);
+    contactForces(false, false);
     raiseFailure();
   }
-  team_.forEachPart([&](int part) { drift(part); });
+  if (!drifted_) team_.forEachPart([&](int part) { drift(part); });
+  drifted_ = false;
   time_ += dt_;
   ++step_;
   updateMeshBinNodes();
   if (std::any_of(part_.begin(), part_.end(), [](const PartState& p) { return p.moved; }) || meshesMovedBeyondSkin())
     rebuildLists();
-  contactForces(true);
+  contactForces(true, drift_ahead);
   raiseFailure();
+  drifted_ = drift_ahead;
 }
 
 namespace {
@@ -285,8 +288,10 @@ void DemSimulation::kick(int part) {
 
 // Pair forces, then (unless a pair overlap failed) wall forces and, with then_kick, the second half
 // kick of each part whose wall contacts did not fail, in the same phase: a particle's force is
-// complete once its part has added the pair sums and its wall forces.
-void DemSimulation::contactForces(bool then_kick) {
+// complete once its part has added the pair sums and its wall forces. With then_drift, a part whose
+// particles all passed the health check goes on with the next step's drift (its particles' forces
+// are final); a failing part leaves its particles as the failure found them, for the message.
+void DemSimulation::contactForces(bool then_kick, bool then_drift) {
   team_.forEachPart([&](int part) { pairForces(part); });
   max_overlap_ = std::max_element(part_.begin(), part_.end(), [](const PartState& a, const PartState& b) {
                    return a.pair_max < b.pair_max;
@@ -295,7 +300,9 @@ void DemSimulation::contactForces(bool then_kick) {
   team_.forEachPart([&](int part) {
     sumPairForces(part);
     wallForces(part);
-    if (then_kick && part_[part].wall_bad < 0) kick(part);
+    if (!then_kick || part_[part].wall_bad >= 0) return;
+    kick(part);
+    if (then_drift && part_[part].kick_bad < 0) drift(part);
   });
   scatterWallForces();
   for (const auto& p : part_) max_overlap_ = std::max(max_overlap_, p.wall_max);

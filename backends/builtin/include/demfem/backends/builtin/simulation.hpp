@@ -224,12 +224,15 @@ class DemSimulation {
   std::size_t rangeEnd(int part) const { return particleCount() * (part + 1) / threads_; }
 
   // simulation.cpp: the step is a sequence of phases of the team, each run once per part, with the
-  // serial work between them on the calling thread.
-  void step();
+  // serial work between them on the calling thread. With drift_ahead (a step of run() followed by
+  // another), each part whose step succeeded also does the next step's first half kick and drift
+  // in the step's last phase, and that step skips its drift phase (drifted_).
+  void step(bool drift_ahead);
   void drift(int part);  // half kick, drift, skin check, force reset
   void kick(int part);   // half kick, health check
-  // Pair and wall forces added to f_, t_, then with then_kick the second half kick; failures recorded.
-  void contactForces(bool then_kick);
+  // Pair and wall forces added to f_, t_, then with then_kick the second half kick and with
+  // then_drift the next step's drift of every part without a failure; failures recorded.
+  void contactForces(bool then_kick, bool then_drift);
   void raiseFailure() const;  // throws BlowUp for the first failure the parts recorded
   void resetFailures();
   // neighbour_lists.cpp: linked cells, the half pair list, the wall candidates (broad search)
@@ -311,6 +314,7 @@ class DemSimulation {
   double skin_ = 0;
   double list_min_radius_ = 0;  // the smallest radius at the last list build (overlap check, pair_forces.cpp)
   bool lists_valid_ = false;
+  bool drifted_ = false;  // the last step drifted the particles for this one (false between runs)
 
   // particles (SoA; vectors xyz-interleaved)
   std::vector<double> x_, v_, w_, f_, t_, x_build_;
