@@ -225,10 +225,7 @@ void DemSimulation::step(bool drift_ahead) {
   drifted_ = drift_ahead;
 }
 
-namespace {
-// Is particle i finite and inside the domain (the health check after the second half kick)?
-// Without branches: no jump per particle and component in the kick's loop.
-bool healthy(const double* x, const double* v, const double* w, const Domain& domain, std::size_t i) {
+bool DemSimulation::VerletSweep::healthy(std::size_t i) const {
   bool ok = true;
   for (int c = 0; c < 3; ++c) {
     const double xc = x[3 * i + c];
@@ -237,50 +234,34 @@ bool healthy(const double* x, const double* v, const double* w, const Domain& do
   }
   return ok;
 }
-}  // namespace
 
-// The arrays as local pointers, which a store of a force cannot change (no reload per particle),
-// and the largest move as a maximum instead of a branch per particle.
+// The largest move as a maximum instead of a branch per particle.
 void DemSimulation::drift(int part) {
-  const double half = 0.5 * dt_, dt = dt_;
+  const VerletSweep s = verletSweep();
   const ForceReset reset = forceReset();
-  double *const x = x_.data(), *const v = v_.data(), *const w = w_.data(), *const f = f_.data(), *const t = t_.data();
-  const double *const x_build = x_build_.data(), *const inv_mass = inv_mass_.data();
-  const double* const inv_inertia = inv_inertia_.data();
   double max_d2 = 0;
   for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
-    double d2 = 0;
-    for (int c = 0; c < 3; ++c) {
-      v[3 * i + c] += half * f[3 * i + c] * inv_mass[i];
-      w[3 * i + c] += half * t[3 * i + c] * inv_inertia[i];
-      x[3 * i + c] += dt * v[3 * i + c];
-      const double d = x[3 * i + c] - x_build[3 * i + c];
-      d2 += d * d;
-    }
+    s.halfKick(i);
+    const double d2 = s.move(i);
     max_d2 = d2 > max_d2 ? d2 : max_d2;
-    reset(i, f, t);
+    reset(i, s.f, s.t);
   }
   part_[part].moved = max_d2 > 0.25 * skin_ * skin_;
 }
 
+// The health check without a branch per particle; only when it finds a particle wrong does a
+// second pass name the first.
 void DemSimulation::kick(int part) {
-  const double half = 0.5 * dt_;
-  const Domain domain = domain_;
-  double *const v = v_.data(), *const w = w_.data();
-  const double *const x = x_.data(), *const f = f_.data(), *const t = t_.data();
-  const double *const inv_mass = inv_mass_.data(), *const inv_inertia = inv_inertia_.data();
+  const VerletSweep s = verletSweep();
   const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
   bool all = true;
   for (std::size_t i = lo; i < hi; ++i) {
-    for (int c = 0; c < 3; ++c) {
-      v[3 * i + c] += half * f[3 * i + c] * inv_mass[i];
-      w[3 * i + c] += half * t[3 * i + c] * inv_inertia[i];
-    }
-    all &= healthy(x, v, w, domain, i);
+    s.halfKick(i);
+    all &= s.healthy(i);
   }
   if (all || part_[part].kick_bad >= 0) return;
   for (std::size_t i = lo; i < hi; ++i)
-    if (!healthy(x, v, w, domain, i)) {
+    if (!s.healthy(i)) {
       part_[part].kick_bad = static_cast<std::int64_t>(i);
       return;
     }

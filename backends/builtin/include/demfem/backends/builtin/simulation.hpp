@@ -294,6 +294,36 @@ class DemSimulation {
   ForceReset forceReset() const {
     return {mass_.data(), v_.data(), w_.data(), inv_inertia_.data(), gravity_, damping_per_s_};
   }
+  // The per-particle steps of the Verlet sweeps (simulation.cpp), on a copy of the array pointers
+  // for the same reason as ForceReset.
+  struct VerletSweep {
+    double half, dt;
+    double *x, *v, *w, *f, *t;
+    const double *x_build, *inv_mass, *inv_inertia;
+    Domain domain;
+    void halfKick(std::size_t i) const {
+      for (int c = 0; c < 3; ++c) {
+        v[3 * i + c] += half * f[3 * i + c] * inv_mass[i];
+        w[3 * i + c] += half * t[3 * i + c] * inv_inertia[i];
+      }
+    }
+    // x += dt v; returns the squared distance from the position at the last list build.
+    double move(std::size_t i) const {
+      double d2 = 0;
+      for (int c = 0; c < 3; ++c) {
+        x[3 * i + c] += dt * v[3 * i + c];
+        const double d = x[3 * i + c] - x_build[3 * i + c];
+        d2 += d * d;
+      }
+      return d2;
+    }
+    // Finite and inside the domain (the health check after the second half kick), without branches.
+    bool healthy(std::size_t i) const;
+  };
+  VerletSweep verletSweep() {
+    return {0.5 * dt_, dt_, x_.data(), v_.data(), w_.data(), f_.data(), t_.data(), x_build_.data(), inv_mass_.data(),
+            inv_inertia_.data(), domain_};
+  }
   ContactStiffness wallStiffness(int i, int wall_material) const;
   // Marks a material as used by particles or walls; throws if a pair it meets has no interaction.
   void useMaterial(int material, bool particle);
