@@ -20,6 +20,7 @@
 // cores give when nothing is shared but the hardware (caches, memory, and on a VM whatever the host
 // shares), the ceiling for 2 threads. Prints a table of every timing and the medians and ratios per
 // round; --json FILE writes the figures (units in the keys) with the load average before and after.
+#include "bench_statistics.hpp"
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
@@ -191,11 +192,6 @@ Timing runTwins(DemSimulation& sim, long steps) {
   return t;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 }  // namespace
 
@@ -342,7 +338,7 @@ int main(int argc, char** argv) {
           rates.push_back(list[r].rate);
           ratios.push_back(list[r].rate / base[r].rate);
         }
-        const double med = median(rates), ratio = median(ratios), worst = *std::min_element(ratios.begin(), ratios.end());
+        const double med = bench::median(rates), ratio = bench::median(ratios), worst = *std::min_element(ratios.begin(), ratios.end());
         if (text)
           std::printf("%s, %d thread(s)%s: median %.3e particle-steps/s; over %d thread(s) in the same round: median %.2fx, "
                       "lowest %.2fx\n",

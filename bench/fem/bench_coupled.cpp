@@ -9,6 +9,7 @@
 // or served over ipc:// from a thread of its own as demfem-dem serves it (--placements), in
 // interleaved rounds on the same settled soil; the DEM runs on the study's dem.threads. Prints a
 // table of medians over the rounds; --json writes the same.
+#include "bench_statistics.hpp"
 #include "demfem/adapter/forwarding_api.hpp"
 #include "demfem/adapter/remote_proxy.hpp"
 #include "demfem/adapter/server.hpp"
@@ -228,10 +229,6 @@ study::Study withIntegration(const fs::path& file, const std::string& integratio
   return study::parseStudy(doc.dump(), file.string());
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 }  // namespace
 
@@ -290,20 +287,22 @@ int main(int argc, char** argv) {
       }
       const std::string placement = placementName(v.placement);
       std::fprintf(table, "%-6s %-10s %6lld %10.2f %11.2f %10.3f %10.4f %10.4f %10.4f %12.2f %10.2f %9.2f\n", v.integration.c_str(),
-                  placement.c_str(), static_cast<long long>(v.costs.front().steps), median(setup), median(open_close), median(dem_ms), median(fem_ms),
-                  median(protocol_ms), median(outputs_ms), median(fem_share), median(outputs_share), median(cpu_per_wall));
+                  placement.c_str(), static_cast<long long>(v.costs.front().steps), bench::median(setup),
+                  bench::median(open_close), bench::median(dem_ms), bench::median(fem_ms), bench::median(protocol_ms),
+                  bench::median(outputs_ms), bench::median(fem_share), bench::median(outputs_share),
+                  bench::median(cpu_per_wall));
       rows.push_back({{"integration", v.integration},
                       {"dem", placement},
                       {"steps", v.costs.front().steps},
-                      {"setup_s", median(setup)},
-                      {"open_close_s", median(open_close)},
-                      {"dem_per_step_ms", median(dem_ms)},
-                      {"fem_step_per_step_ms", median(fem_ms)},
-                      {"protocol_per_step_ms", median(protocol_ms)},
-                      {"outputs_inline_per_step_ms", median(outputs_ms)},
-                      {"fem_and_protocol_wall_percent", median(fem_share)},
-                      {"outputs_inline_wall_percent", median(outputs_share)},
-                      {"process_cpu_per_wall", median(cpu_per_wall)}});
+                      {"setup_s", bench::median(setup)},
+                      {"open_close_s", bench::median(open_close)},
+                      {"dem_per_step_ms", bench::median(dem_ms)},
+                      {"fem_step_per_step_ms", bench::median(fem_ms)},
+                      {"protocol_per_step_ms", bench::median(protocol_ms)},
+                      {"outputs_inline_per_step_ms", bench::median(outputs_ms)},
+                      {"fem_and_protocol_wall_percent", bench::median(fem_share)},
+                      {"outputs_inline_wall_percent", bench::median(outputs_share)},
+                      {"process_cpu_per_wall", bench::median(cpu_per_wall)}});
     }
     cli::writeJson(json_target, {{"study", study_file}, {"rounds", rounds}, {"runs", rows}});
   });

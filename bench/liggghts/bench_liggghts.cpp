@@ -4,7 +4,10 @@
 //   rolling friction, the same calls on both backends: particle-steps per second on 1 and 2 cores
 //   (built-in: threads; LIGGGHTS: MPI ranks via mpirun), their ratio, and the mean draught
 //   force over the same drag window with its scatter over the seeds. Deposition and insertion are
-//   not timed.
+//   not timed. With --rounds R every (seed, cores) pair is run R times, the backends alternated
+//   (A B A B), and the built-in DEM's speed over LIGGGHTS' in the same round is reported per round
+//   with its median and lowest value: the machine's drift between runs cancels in a ratio of
+//   neighbours.
 // - --coupled: the study as it is (contact laws included), run coupled with the FEM client
 //   (fem::CoupledDriver) in-process on each backend, one core, per seed: mean draught and mean
 //   load-cell force over the drag phase, their mean and scatter over the seeds and the difference
@@ -17,6 +20,7 @@
 // Every LIGGGHTS run starts this program again under `mpirun -np N` in worker mode (--worker), so that
 // this process never initialises MPI: an MPI singleton's environment, inherited by a child mpirun,
 // makes that mpirun fail (the 2-rank runs failed so before).
+#include "bench_statistics.hpp"
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/adapter/tool_drive.hpp"
 #include "demfem/backends/builtin/backend.hpp"
@@ -48,6 +52,7 @@ struct RunResult {
   std::string backend;
   int cores = 1;
   std::uint64_t seed = 1;
+  int round = 1;  // speed runs: the interleaved round (--rounds)
   std::int64_t particles = 0;
   std::int64_t steps = 0;
   double wall_s = 0;
@@ -65,7 +70,7 @@ struct RunResult {
 };
 
 nlohmann::json toJson(const RunResult& r) {
-  return {{"backend", r.backend},     {"cores", r.cores},        {"seed", r.seed},
+  return {{"backend", r.backend},     {"cores", r.cores},        {"seed", r.seed},  {"round", r.round},
           {"particles", r.particles}, {"steps", r.steps},        {"wall_s", r.wall_s},        {"cpu_s", r.cpu_s},
           {"draught_N", r.draught_N}, {"load_cell_N", r.load_cell_N}, {"particle_steps_per_s", r.particleStepsPerSecond()},
           {"surface_mm", r.surface_mm},
@@ -334,6 +339,19 @@ void requireBothBackends(const std::string& file, study::Study s) {
   if (!problems.empty()) throw cli::InputError("the benchmark runs the study on both backends, which it does not fit:" + problems);
 }
 
+// Per (seed, round) with both backends on `cores`: the built-in DEM's particle-steps per second
+// over LIGGGHTS', in run order.
+std::vector<double> builtinOverLiggghtsPerRound(const std::vector<RunResult>& runs, int cores) {
+  std::vector<double> ratios;
+  for (const auto& b : runs) {
+    if (b.backend != "builtin" || b.cores != cores) continue;
+    for (const auto& l : runs)
+      if (l.backend == "liggghts" && l.cores == cores && l.seed == b.seed && l.round == b.round)
+        ratios.push_back(b.particleStepsPerSecond() / l.particleStepsPerSecond());
+  }
+  return ratios;
+}
+
 struct Summary {
   double mean = 0, stddev = 0;
 };
@@ -356,12 +374,16 @@ int main(int argc, char** argv) {
   // The quick bin with the soil stiffness of the paper's EDEM spring (quick_liggghts.json notes);
   // quick.json's E would make LIGGGHTS' hooke spring 100x stiffer and the step 10x shorter.
   std::string file = std::string(DEMFEM_SOURCE_DIR) + "/studies/quick_liggghts.json";
-  int seeds = 3;
+  int seeds = 3, rounds = 1;
+  std::vector<int> core_counts{1, 2};
   double window_s = 1.0;
   std::uint64_t worker_seed = 0;
   app.add_option("--study", file, "Study whose soil and first tool are used (speed runs replace its contact law, --coupled runs keep it)")
       ->check(CLI::ExistingFile);
   app.add_option("--seeds", seeds, "Deposition seeds 1..N for the draught-force scatter")->check(CLI::PositiveNumber);
+  app.add_option("--rounds", rounds, "Speed runs: interleaved rounds per seed and core count (the backends alternated)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--cores", core_counts, "Speed runs: core counts to time (default 1 2)")->check(CLI::Range(1, 64));
   app.add_option("--window-s", window_s, "Simulated drag time that is timed and averaged (s)")
       ->check(CLI::PositiveNumber);
   app.add_option("--settle-kinetic-energy-J", g_settle_kinetic_energy_J,
@@ -408,14 +430,19 @@ int main(int argc, char** argv) {
     };
     // The soil's own backend runs first on each seed: its construction deposits the soil file.
     const bool liggghts_first = seededStudy(file, 1, 1).soil.deposition_backend == "liggghts";
-    const std::vector<int> core_counts = g_coupled ? std::vector<int>{1} : std::vector<int>{1, 2};
+    if (g_coupled) core_counts = {1}, rounds = 1;
     for (int seed = 1; seed <= seeds; ++seed)
-      for (int cores : core_counts) {
-        const auto seed_u = static_cast<std::uint64_t>(seed);
-        if (liggghts_first) record(runLiggghtsRanks(file, seed_u, cores, window_s));
-        record(runBuiltin(file, seed_u, cores, window_s));
-        if (!liggghts_first) record(runLiggghtsRanks(file, seed_u, cores, window_s));
-      }
+      for (int cores : core_counts)
+        for (int round = 1; round <= rounds; ++round) {
+          const auto seed_u = static_cast<std::uint64_t>(seed);
+          const auto inRound = [round](RunResult r) {
+            r.round = round;
+            return r;
+          };
+          if (liggghts_first) record(inRound(runLiggghtsRanks(file, seed_u, cores, window_s)));
+          record(inRound(runBuiltin(file, seed_u, cores, window_s)));
+          if (!liggghts_first) record(inRound(runLiggghtsRanks(file, seed_u, cores, window_s)));
+        }
 
     if (text && g_coupled) printPaperEvaluation(runs);
     // Per backend and core count: speed, draught and load cell, mean and sample standard deviation
@@ -426,14 +453,15 @@ int main(int argc, char** argv) {
       std::vector<double> draught_diff, load_diff;  // per seed, liggghts - builtin (same soil)
       for (const std::string backend : {"builtin", "liggghts"}) {
         std::vector<double> d, rate, lc, wf, wd;
-        for (const auto& r : runs)
-          if (r.backend == backend && r.cores == cores) {
-            d.push_back(r.draught_N);
-            rate.push_back(r.particleStepsPerSecond());
-            lc.push_back(r.load_cell_N);
-            wf.push_back(r.force_mean_N);
-            wd.push_back(r.deformation_mean_mm);
-          }
+        for (const auto& r : runs) {
+          if (r.backend != backend || r.cores != cores) continue;
+          rate.push_back(r.particleStepsPerSecond());
+          if (r.round != 1) continue;  // a seed's forces once: its rounds repeat them
+          d.push_back(r.draught_N);
+          lc.push_back(r.load_cell_N);
+          wf.push_back(r.force_mean_N);
+          wd.push_back(r.deformation_mean_mm);
+        }
         speed[backend] = summarise(rate), draught[backend] = summarise(d), load_cell[backend] = summarise(lc);
         window_force[backend] = summarise(wf), window_deformation[backend] = summarise(wd);
         if (text)
@@ -471,6 +499,18 @@ int main(int argc, char** argv) {
       const double ratio = speed["liggghts"].mean / speed["builtin"].mean;
       if (text) std::printf("speed ratio liggghts / builtin on %d core(s): %.3f\n", cores, ratio);
       summary["speed_ratio_liggghts_over_builtin_" + std::to_string(cores) + "_cores"] = ratio;
+      const std::vector<double> per_round = builtinOverLiggghtsPerRound(runs, cores);
+      if (!per_round.empty()) {
+        const double median = bench::median(per_round);
+        const double lowest = *std::min_element(per_round.begin(), per_round.end());
+        if (text) {
+          std::printf("built-in / liggghts speed on %d core(s), per round (same seed, runs side by side):", cores);
+          for (double r : per_round) std::printf(" %.2fx", r);
+          std::printf("; median %.2fx, lowest %.2fx\n", median, lowest);
+        }
+        summary["speed_ratio_builtin_over_liggghts_per_round_" + std::to_string(cores) + "_cores"] = {
+            {"per_round", per_round}, {"median", median}, {"lowest", lowest}};
+      }
     }
     nlohmann::json all = nlohmann::json::array();
     for (const auto& r : runs) all.push_back(toJson(r));
