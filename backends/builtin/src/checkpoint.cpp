@@ -140,6 +140,9 @@ DemSimulation DemSimulation::withState(adapter::PayloadReader& in) const {
   in.getVector(wall.start);
   in.getVector(s.plane_force_);
   s.checkRestoredAgainst(*this, wall, in);
+  s.nb_i_.resize(s.nb_j_.size());
+  for (std::size_t i = 0; i + 1 < s.nb_start_.size(); ++i)
+    std::fill(s.nb_i_.begin() + s.nb_start_[i], s.nb_i_.begin() + s.nb_start_[i + 1], static_cast<std::int32_t>(i));
   s.setWallContacts(wall);
   s.updateMeshBinNodes();
   return s;

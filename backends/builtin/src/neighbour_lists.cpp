@@ -50,7 +50,8 @@ void DemSimulation::rebuildLists() {
   nb_touch_.swap(next_touch_);
   nb_start_.swap(build_start_);
   nb_j_.swap(build_j_);
-  DEMFEM_ASSERT(nb_start_.size() == n + 1 && nb_stiff_.size() == nb_j_.size());
+  nb_i_.swap(build_i_);
+  DEMFEM_ASSERT(nb_start_.size() == n + 1 && nb_stiff_.size() == nb_j_.size() && nb_i_.size() == nb_j_.size());
   buildWallCandidates(grid_);
   x_build_ = x_;
   mesh_build_nodes_ = mesh_bin_nodes_;
@@ -125,6 +126,7 @@ void DemSimulation::buildRows(int part) {
 void DemSimulation::sizeNextLists() {
   const std::size_t slots = static_cast<std::size_t>(build_start_[particleCount()]);
   build_j_.resize(slots);
+  build_i_.resize(slots);
   next_stiff_.resize(slots);
   next_hist_.resize(slots * layout_.size);
   next_touch_.resize(slots);
@@ -148,6 +150,7 @@ void DemSimulation::fillNextList(int part) {
       const std::int32_t j = rows[s - base];
       DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < n && (s == build_start_[i] || build_j_[s - 1] < j));
       build_j_[s] = j;
+      build_i_[s] = static_cast<std::int32_t>(i);
       window_end = std::max(window_end, static_cast<std::size_t>(j) + 1);
       const double ri = radius_[i], rj = radius_[j];
       const double mi = mass_[i], mj = mass_[j];

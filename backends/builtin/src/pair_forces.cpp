@@ -245,16 +245,17 @@ void DemSimulation::pairLoop(int part) {
 
 // The touching slots of rows [i0, i1) into the batch with their histories, written at the next
 // free place whether touching or not and kept by advancing the count (no branch on the contact); a
-// slot that stopped touching loses its history. The arrays are taken as local pointers once: a
-// store through one of them cannot then make the compiler reload the others every slot.
+// slot that stopped touching loses its history. One loop over the slots, each with its row: a loop
+// over rows, with their few slots each, mispredicts where every row ends. The arrays are taken as
+// local pointers once: a store through one of them cannot then make the compiler reload the others
+// every slot.
 template <int H>
 std::size_t DemSimulation::findTouching(std::size_t i0, std::size_t i1, [[maybe_unused]] std::size_t window_end,
                                        PairBatch& b) {
   const double* const x = x_.data();
   const double* const radius = radius_.data();
   const std::int32_t* const material = material_.data();
-  const std::int32_t* const start = nb_start_.data();
-  const std::int32_t* const nb_j = nb_j_.data();
+  const std::int32_t *const nb_i = nb_i_.data(), *const nb_j = nb_j_.data();
   std::uint8_t* const touch = nb_touch_.data();
   double* const stored_hist = nb_hist_.data();
   std::int32_t *const slot = b.slot.data(), *const bi = b.i.data(), *const bj = b.j.data(), *const law = b.law.data();
@@ -263,33 +264,29 @@ std::size_t DemSimulation::findTouching(std::size_t i0, std::size_t i1, [[maybe_
   for (int c = 0; c < H; ++c) hist[c] = b.hist[c].data();
   const auto M = static_cast<std::int32_t>(table_.materials.size());
   std::size_t count = 0;
-  for (std::size_t i = i0; i < i1; ++i) {
-    const double xi = x[3 * i], yi = x[3 * i + 1], zi = x[3 * i + 2];
-    const double ri = radius[i];
-    const std::int32_t law_row = material[i] * M;
-    for (std::int32_t s = start[i]; s < start[i + 1]; ++s) {
-      const std::int32_t j = nb_j[s];
-      DEMFEM_ASSERT(static_cast<std::size_t>(j) > i && static_cast<std::size_t>(j) < window_end);
-      const double* xj = x + 3 * static_cast<std::size_t>(j);
-      const double d[3] = {xi - xj[0], yi - xj[1], zi - xj[2]};
-      const double rs = ri + radius[j];
-      const double r2 = norm2(d);
-      const std::uint8_t touching = r2 < rs * rs;
-      double* const slot_hist = stored_hist + static_cast<std::size_t>(s) * H;
-      if (touching != touch[s]) [[unlikely]] {
-        touch[s] = touching;
-        if (!touching) std::fill_n(slot_hist, H, 0.0);
-      }
-      slot[count] = s;
-      bi[count] = static_cast<std::int32_t>(i);
-      bj[count] = j;
-      law[count] = law_row + material[j];
-      d0[count] = d[0];
-      d1[count] = d[1];
-      d2[count] = d[2];
-      for (int c = 0; c < H; ++c) hist[c][count] = slot_hist[c];
-      count += touching;
+  for (std::int32_t s = nb_start_[i0]; s < nb_start_[i1]; ++s) {
+    const std::int32_t i = nb_i[s], j = nb_j[s];
+    DEMFEM_ASSERT(static_cast<std::size_t>(i) >= i0 && static_cast<std::size_t>(i) < i1 && j > i &&
+                  static_cast<std::size_t>(j) < window_end);
+    const double *xi = x + 3 * static_cast<std::size_t>(i), *xj = x + 3 * static_cast<std::size_t>(j);
+    const double d[3] = {xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]};
+    const double rs = radius[i] + radius[j];
+    const double r2 = norm2(d);
+    const std::uint8_t touching = r2 < rs * rs;
+    double* const slot_hist = stored_hist + static_cast<std::size_t>(s) * H;
+    if (touching != touch[s]) [[unlikely]] {
+      touch[s] = touching;
+      if (!touching) std::fill_n(slot_hist, H, 0.0);
     }
+    slot[count] = s;
+    bi[count] = i;
+    bj[count] = j;
+    law[count] = material[i] * M + material[j];
+    d0[count] = d[0];
+    d1[count] = d[1];
+    d2[count] = d[2];
+    for (int c = 0; c < H; ++c) hist[c][count] = slot_hist[c];
+    count += touching;
   }
   return count;
 }

@@ -100,6 +100,7 @@ void DemSimulation::keepParticles(const std::vector<char>& keep) {
   layer_.resize(k);
   nb_start_.clear();
   nb_j_.clear();
+  nb_i_.clear();
   nb_stiff_.clear();
   nb_hist_.clear();
   nb_touch_.clear();
@@ -403,7 +404,7 @@ std::size_t DemSimulation::bytesPerParticle() const {
   const std::size_t n = std::max<std::size_t>(1, particleCount());
   std::size_t b = 0;
   for (const auto* a : {&x_, &v_, &w_, &f_, &t_, &x_build_, &radius_, &mass_, &inv_mass_, &inv_inertia_}) b += a->capacity() * sizeof(double);
-  b += (material_.capacity() + layer_.capacity() + nb_start_.capacity() + nb_j_.capacity() + wc_start_.capacity() +
+  b += (material_.capacity() + layer_.capacity() + nb_start_.capacity() + nb_j_.capacity() + nb_i_.capacity() + wc_start_.capacity() +
         wc_mesh_.capacity() + wc_tri_.capacity()) * sizeof(std::int32_t);
   b += nb_stiff_.capacity() * sizeof(ContactStiffness) + nb_hist_.capacity() * sizeof(double) + nb_touch_.capacity();
   for (const auto& t : part_) {

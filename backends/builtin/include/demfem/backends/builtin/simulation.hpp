@@ -352,8 +352,9 @@ class DemSimulation {
   std::vector<std::int32_t> material_, layer_;
   std::vector<std::uint8_t> used_;  // per material: 1 wall, 2 particle
 
-  // half neighbour list (CSR) with per-slot stiffness and history
-  std::vector<std::int32_t> nb_start_, nb_j_;
+  // half neighbour list (CSR) with per-slot stiffness and history; nb_i_ holds each slot's row
+  // (derived from nb_start_, not saved): the pair loop runs over slots, not rows
+  std::vector<std::int32_t> nb_start_, nb_j_, nb_i_;
   std::vector<ContactStiffness> nb_stiff_;
   std::vector<double> nb_hist_;
   std::vector<std::uint8_t> nb_touch_;
@@ -377,7 +378,7 @@ class DemSimulation {
   ThreadTeam team_;
   std::vector<PartState> part_;
   CellGrid grid_;
-  std::vector<std::int32_t> build_start_, build_j_;  // the list being built (rebuildLists)
+  std::vector<std::int32_t> build_start_, build_j_, build_i_;  // the list being built (rebuildLists)
   std::vector<ContactStiffness> next_stiff_;
   std::vector<double> next_hist_;
   std::vector<std::uint8_t> next_touch_;
