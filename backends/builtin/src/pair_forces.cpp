@@ -8,7 +8,7 @@
 #include "demfem/backends/builtin/simulation.hpp"
 
 #include "contact_kinematics.hpp"
-#include "demfem/backends/builtin/vector_isa.hpp"
+#include "vectorised_loop.hpp"
 #include "demfem/backends/physics/dem_assert.hpp"
 
 #include <algorithm>
@@ -22,44 +22,6 @@ using detail::norm2;
 namespace {
 
 constexpr std::size_t kBatchContacts = 256;  // touching contacts per batch (rows are not split)
-
-// A loop whose iterations are independent (no store reaches another iteration's loads). GCC is
-// told so; clang's vectoriser, told the same, still refuses these loops and warns each time, so it
-// is left to its own analysis (only the sanitizer build uses clang).
-#if defined(__clang__)
-#define DEMFEM_INDEPENDENT_ITERATIONS
-#else
-#define DEMFEM_INDEPENDENT_ITERATIONS _Pragma("GCC ivdep")
-#endif
-#define DEMFEM_INLINE __attribute__((always_inline))
-
-// runVectorised(f) runs f() compiled for vectorIsa(): f is an always-inline lambda, so its loops
-// are compiled anew inside each runner. (Function clones of the batch loops would do the same, but
-// clang does not clone templates.)
-#if defined(__x86_64__)
-template <class F>
-[[gnu::target("avx512f")]] void runAvx512(const F& f) {
-  f();
-}
-template <class F>
-[[gnu::target("avx2")]] void runAvx2(const F& f) {
-  f();
-}
-#endif
-
-template <class F>
-void runVectorised(const F& f) {
-  switch (vectorIsa()) {
-#if defined(__x86_64__)
-    case VectorIsa::Avx512: runAvx512(f); return;
-    case VectorIsa::Avx2: runAvx2(f); return;
-#else
-    case VectorIsa::Avx512:
-    case VectorIsa::Avx2:
-#endif
-    case VectorIsa::Baseline: f(); return;
-  }
-}
 
 // What the loops over a batch read: the simulation's particle arrays, the pair laws, the list
 // slots' stiffness, and the batch's contacts (slot, i, j, law index; centre difference x_i - x_j,

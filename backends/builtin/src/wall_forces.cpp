@@ -2,12 +2,15 @@
 // double counting"), in the steps of a contact search: the broad search (the candidates of the list
 // build, neighbour_lists.cpp) is narrowed per particle to the wall features it touches (fine
 // search), features reached through several triangles become one contact, each contact takes its
-// history over from the last step, and the law's force is split to the mesh nodes.
+// history over from the last step, and the law's force is split to the mesh nodes. The contacts of
+// a run of particles are gathered into a batch whose law runs as a vectorised loop, like the pair
+// loop's (pair_forces.cpp), with the numbers of one contact after the other.
 #include "demfem/backends/builtin/simulation.hpp"
 
 #include "demfem/backends/physics/dem_assert.hpp"
 
 #include "contact_kinematics.hpp"
+#include "vectorised_loop.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -21,6 +24,7 @@ using detail::norm2;
 
 namespace {
 constexpr int kMaxWallCandidates = 32;  // touching features per particle before de-duplication
+constexpr std::size_t kWallBatchContacts = 128;  // contacts per batch (a particle's are not split)
 constexpr double kSameContact = 1e-6;    // contact points closer than this * radius are one contact
 }  // namespace
 
@@ -80,7 +84,84 @@ void acceptDistinct(WallTouch* touch, int nt, int planes, double radius, bool* a
   }
 }
 
+// What the loops over a wall batch read: the simulation's particle arrays, the pair laws, and the
+// batch.
+struct WallInputs {
+  const double *v, *w, *radius, *inv_inertia;
+  const PairLaw* laws;
+  const std::int32_t *i, *law;
+  const ContactStiffness* stiffness;
+  const double *n0, *n1, *n2, *dist, *vw0, *vw1, *vw2, *cohesion;
+};
+
+// The cohesive normal force of count wall contacts (cohesionForce<C> with a wall's geometry:
+// R* = R_i, overlap R_i - distance).
+template <study::CohesionModel C>
+[[gnu::always_inline]] inline void wallCohesion(const WallInputs& inputs, std::size_t count, double* cohesion) {
+  const WallInputs in = inputs;  // the arrays in registers: the stores below do not reach them
+  DEMFEM_INDEPENDENT_ITERATIONS
+  for (std::size_t k = 0; k < count; ++k) {
+    const double ri = in.radius[in.i[k]], r = in.dist[k];
+    cohesion[k] = cohesionForce<C>(in.laws[in.law[k]].cohesion_J_m3, ri, ri - r, ri, r, 0, true);
+  }
+}
+
+// The law of count wall contacts into the batch's result arrays.
+template <study::NormalModel N, study::RollingModel R, bool Shear>
+[[gnu::always_inline]] inline void wallLaws(const study::ContactModel& model, const WallInputs& inputs, std::size_t count,
+                                            double dt, double rolling_dt, WallBatch& out) {
+  constexpr HistoryLayout L = HistoryLayout::of(N, R, Shear);
+  const WallInputs in = inputs;  // the arrays in registers: the stores below do not reach them
+  const study::ContactModel m = model;
+  double *f0 = out.f[0].data(), *f1 = out.f[1].data(), *f2 = out.f[2].data();
+  double *t0 = out.t[0].data(), *t1 = out.t[1].data(), *t2 = out.t[2].data();
+  double* delta = out.delta.data();
+  double* const hist[HistoryLayout::kMaxSize] = {out.hist[0].data(), out.hist[1].data(), out.hist[2].data(), out.hist[3].data(),
+                                                 out.hist[4].data(), out.hist[5].data(), out.hist[6].data()};
+  DEMFEM_INDEPENDENT_ITERATIONS
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t i = static_cast<std::size_t>(in.i[k]);
+    const double normal[3] = {in.n0[k], in.n1[k], in.n2[k]};
+    const double vwall[3] = {in.vw0[k], in.vw1[k], in.vw2[k]};
+    ContactKinematics kin =
+        contactKinematics<true>(normal, in.dist[k], in.radius[i], 0, &in.v[3 * i], &in.w[3 * i], vwall, nullptr);
+    kin.wrel_norm = std::sqrt(norm2(kin.wrel));
+    kin.inv_ii = in.inv_inertia[i];
+    ContactHistory h;
+    if constexpr (L.shear >= 0)
+      for (int c = 0; c < 3; ++c) h.shear[c] = hist[L.shear + c][k];
+    if constexpr (L.delta_max >= 0) h.delta_max = hist[L.delta_max][k];
+    if constexpr (L.roll >= 0)
+      for (int c = 0; c < 3; ++c) h.roll[c] = hist[L.roll + c][k];
+    const ContactResult res =
+        contactForce<N, R, Shear>(m, in.laws[in.law[k]], in.stiffness[k], kin, dt, rolling_dt, in.cohesion[k], h, true);
+    f0[k] = res.force[0];
+    f1[k] = res.force[1];
+    f2[k] = res.force[2];
+    t0[k] = res.torque_i[0];
+    t1[k] = res.torque_i[1];
+    t2[k] = res.torque_i[2];
+    delta[k] = kin.delta;
+    if constexpr (L.shear >= 0)
+      for (int c = 0; c < 3; ++c) hist[L.shear + c][k] = h.shear[c];
+    if constexpr (L.delta_max >= 0) hist[L.delta_max][k] = h.delta_max;
+    if constexpr (L.roll >= 0)
+      for (int c = 0; c < 3; ++c) hist[L.roll + c][k] = h.roll[c];
+  }
+}
+
 }  // namespace
+
+void WallBatch::growTo(std::size_t contacts) {
+  if (i.size() >= contacts) return;
+  i.resize(contacts);
+  law.resize(contacts);
+  stiffness.resize(contacts);
+  for (auto* a : {&dist, &cohesion, &delta}) a->resize(contacts);
+  for (auto* a : {n, vwall, f, t})
+    for (int c = 0; c < 3; ++c) a[c].resize(contacts);
+  for (auto& h : hist) h.resize(contacts);
+}
 
 int DemSimulation::planeTouches(std::size_t i, WallTouch* touch, int nt) const {
   if (!near_plane_[i]) return nt;
@@ -194,18 +275,23 @@ void DemSimulation::wallForces(int part) {
 }
 
 // The wall contacts of this part's particles, in particle order, into its own list (the next
-// step's old contacts); the forces go to the particles at once, the reactions to the walls after
-// the phase (serial, scatterWallForces).
+// step's old contacts); the forces go to the particles batch by batch, the reactions to the walls
+// after the phase (serial, scatterWallForces).
 template <study::NormalModel N, study::RollingModel R, bool Shear>
 void DemSimulation::wallLoop(int part) {
+  constexpr HistoryLayout L = HistoryLayout::of(N, R, Shear);
   PartState& ts = part_[part];
   const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
   const bool have_old = ts.wall_start.size() == hi - lo + 1;
   auto& out = ts.wall_next;
   out.clear();
   ts.wall_start_next.resize(hi - lo + 1);
-  double local_max = 0;
-  std::int64_t bad = -1;
+  WallBatch& b = ts.wall_batch;
+  b.growTo(kWallBatchContacts + kMaxWallCandidates);
+  const auto M = static_cast<std::int32_t>(table_.materials.size());
+  ts.wall_max = 0;
+  ts.wall_bad = -1;
+  std::size_t count = 0;  // contacts in the batch: out's last ones
   WallTouch touch[kMaxWallCandidates];
   bool accepted[kMaxWallCandidates];
   int matched_old[kMaxWallCandidates];
@@ -221,35 +307,61 @@ void DemSimulation::wallLoop(int part) {
     matchHistory(old, n_old, touch, nt, accepted, matched_old);
     for (int a = 0; a < nt; ++a) {
       if (!accepted[a]) continue;
-      WallContact wc = openWallContact(i, touch[a], matched_old[a] >= 0 ? old + matched_old[a] : nullptr);
+      const WallContact& wc = out.emplace_back(openWallContact(i, touch[a], matched_old[a] >= 0 ? old + matched_old[a] : nullptr));
       const Vec3 vwall = wallVelocity(touch[a]);
-      ContactKinematics k = contactKinematics<true>(touch[a].normal.data(), touch[a].dist, radius_[i], 0,
-                                                    &v_[3 * i], &w_[3 * i], vwall.data(), nullptr);
-      k.wrel_norm = std::sqrt(norm2(k.wrel));
-      k.inv_ii = inv_inertia_[i];
-      if (k.delta > local_max) local_max = k.delta;
-      if (k.delta > overlapLimitFraction() * radius_[i] && bad < 0) {
-        bad = static_cast<std::int64_t>(i);
-        ts.wall_bad_wall = touch[a].wall;
-      }
-      const PairLaw& law = table_.law(material_[i], wallMaterial(touch[a].wall));
-      ContactHistory hist = loadHistory(layout_, wc.hist);
-      const ContactResult res = contactForce<N, R, Shear>(model_, law, wc.stiffness, k, dt_, rollingStep(),
-                                                          cohesionForce(model_.cohesion, law, k, true), hist, true);
-      storeHistory(layout_, hist, wc.hist);
+      b.i[count] = static_cast<std::int32_t>(i);
+      b.law[count] = material_[i] * M + wallMaterial(touch[a].wall);
+      b.stiffness[count] = wc.stiffness;
+      b.dist[count] = touch[a].dist;
       for (int c = 0; c < 3; ++c) {
-        f_[3 * i + c] += res.force[c];
-        t_[3 * i + c] += res.torque_i[c];
-        wc.force[c] = res.force[c];
+        b.n[c][count] = touch[a].normal[c];
+        b.vwall[c][count] = vwall[c];
       }
-      out.push_back(wc);
+      for (int h = 0; h < L.size; ++h) b.hist[h][count] = wc.hist[h];
+      ++count;
+    }
+    if (count >= kWallBatchContacts) {
+      wallBatchForces<N, R, Shear>(ts, count, out.data() + (out.size() - count), ts.wall_max);
+      count = 0;
     }
   }
+  if (count > 0) wallBatchForces<N, R, Shear>(ts, count, out.data() + (out.size() - count), ts.wall_max);
   ts.wall_start_next[hi - lo] = static_cast<std::int32_t>(out.size());
   ts.wall.swap(ts.wall_next);
   ts.wall_start.swap(ts.wall_start_next);
-  ts.wall_max = local_max;
-  ts.wall_bad = bad;
+}
+
+template <study::NormalModel N, study::RollingModel R, bool Shear>
+void DemSimulation::wallBatchForces(PartState& part, std::size_t count, WallContact* contacts, double& max_overlap) {
+  constexpr HistoryLayout L = HistoryLayout::of(N, R, Shear);
+  WallBatch& b = part.wall_batch;
+  const WallInputs in{v_.data(),          w_.data(),          radius_.data(),     inv_inertia_.data(), table_.laws.data(),
+                      b.i.data(),         b.law.data(),       b.stiffness.data(), b.n[0].data(),       b.n[1].data(),
+                      b.n[2].data(),      b.dist.data(),      b.vwall[0].data(),  b.vwall[1].data(),   b.vwall[2].data(),
+                      b.cohesion.data()};
+  withCohesion(model_.cohesion, [&]<study::CohesionModel C>() {
+    runVectorised([&]() DEMFEM_INLINE { wallCohesion<C>(in, count, b.cohesion.data()); });
+  });
+  const double rolling_dt = rollingStep();
+  runVectorised([&]() DEMFEM_INLINE { wallLaws<N, R, Shear>(model_, in, count, dt_, rolling_dt, b); });
+  // In contact order: each particle's forces are added as one contact after the other would.
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t i = static_cast<std::size_t>(b.i[k]);
+    WallContact& wc = contacts[k];
+    const double delta = b.delta[k];
+    if (delta > max_overlap) max_overlap = delta;
+    if (delta > overlapLimitFraction() * radius_[i] && part.wall_bad < 0) {
+      part.wall_bad = static_cast<std::int64_t>(i);
+      part.wall_bad_wall = wc.wall;
+    }
+    for (int h = 0; h < L.size; ++h) wc.hist[h] = b.hist[h][k];
+    const double force[3] = {b.f[0][k], b.f[1][k], b.f[2][k]}, torque[3] = {b.t[0][k], b.t[1][k], b.t[2][k]};
+    for (int c = 0; c < 3; ++c) {
+      f_[3 * i + c] += force[c];
+      t_[3 * i + c] += torque[c];
+      wc.force[c] = force[c];
+    }
+  }
 }
 
 void DemSimulation::dropWallContacts() {

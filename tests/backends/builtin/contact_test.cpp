@@ -18,24 +18,6 @@ namespace {
 constexpr double kR = 0.005;  // sphere radius (m)
 constexpr double kG = 9.81;
 
-// A flat square mesh in the plane y = 0 (normal +y), (n+1) x (n+1) nodes over [-h, h]^2 in x and z,
-// each square split along its diagonal.
-TriangleMesh flatMesh(double h, int n) {
-  TriangleMesh mesh;
-  mesh.name = "flat";
-  for (int k = 0; k <= n; ++k)
-    for (int i = 0; i <= n; ++i) mesh.rest_nodes.push_back({-h + 2 * h * i / n, 0.0, -h + 2 * h * k / n});
-  const auto id = [n](int i, int k) { return static_cast<std::int32_t>(k * (n + 1) + i); };
-  for (int k = 0; k < n; ++k)
-    for (int i = 0; i < n; ++i) {
-      // counter-clockwise seen from +y: (i,k) -> (i,k+1) -> (i+1,k+1)
-      mesh.triangles.push_back({id(i, k), id(i, k + 1), id(i + 1, k + 1)});
-      mesh.triangles.push_back({id(i, k), id(i + 1, k + 1), id(i + 1, k)});
-    }
-  mesh.nodes = mesh.rest_nodes;
-  return mesh;
-}
-
 // Raises gravity smoothly from 0 to g over `ramp` seconds, then holds it for `hold` seconds and
 // returns the mean overlap of particle 0 with the plane y = 0 during the hold.
 double quasiStaticRestingOverlap(DemSimulation& sim, double ramp, double hold) {

@@ -94,6 +94,19 @@ struct PairBatch {
   void growTo(std::size_t slots);  // every array at least `slots` long (never shrinks)
 };
 
+// The wall loop's contacts of a run of particles as arrays, memory reused (wall_forces.cpp):
+// particle, index of its PairLaw (particle material, wall material), stiffness; unit normal
+// towards the particle, centre-to-wall distance, the wall's velocity at the contact point,
+// cohesive force; the law's results (force and torque on the particle, overlap, the history by its
+// stored offset).
+struct WallBatch {
+  std::vector<std::int32_t> i, law;
+  std::vector<ContactStiffness> stiffness;
+  std::vector<double> n[3], dist, vwall[3], cohesion, delta;
+  std::vector<double> f[3], t[3], hist[HistoryLayout::kMaxSize];
+  void growTo(std::size_t contacts);  // every array at least `contacts` long (never shrinks)
+};
+
 class DemSimulation {
  public:
   DemSimulation(const study::Soil& soil, const Domain& domain, int threads);
@@ -202,6 +215,7 @@ class DemSimulation {
     std::vector<std::int32_t> wall_start, wall_start_next;
     std::vector<std::int32_t> rows;      // list build: the neighbours of its rows
     PairBatch batch;                     // pair loop: the touching contacts of a batch of rows
+    WallBatch wall_batch;                // wall loop: the contacts of a run of particles
     double pair_max = 0, wall_max = 0;   // largest overlap of its pair and of its wall contacts
     std::int64_t pair_bad = -1, wall_bad = -1, kick_bad = -1;  // first failing particle, -1 none
     int wall_bad_wall = -1;              // the wall (planes, then meshes) of wall_bad's overlap
@@ -255,6 +269,10 @@ class DemSimulation {
   void sumPairForces(int part);
   void wallForces(int part);
   template <study::NormalModel N, study::RollingModel R, bool Shear> void wallLoop(int part);
+  // The law of a wall batch's `count` contacts, whose WallContacts are contacts[0, count): forces to
+  // the particles and into the contacts, histories into the contacts, the part's overlap checks.
+  template <study::NormalModel N, study::RollingModel R, bool Shear>
+  void wallBatchForces(PartState& part, std::size_t count, WallContact* contacts, double& max_overlap);
   int planeTouches(std::size_t i, WallTouch* touch, int count) const;  // fine search: appends, returns the count
   int meshTouches(std::size_t i, WallTouch* touch, int count) const;
   // old: the particle's n_old contacts of the last step; matched_old[a] indexes them, -1 none.
