@@ -279,47 +279,24 @@ void DemSimulation::wallForces(int part) {
 // after the phase (serial, scatterWallForces).
 template <study::NormalModel N, study::RollingModel R, bool Shear>
 void DemSimulation::wallLoop(int part) {
-  constexpr HistoryLayout L = HistoryLayout::of(N, R, Shear);
   PartState& ts = part_[part];
   const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
   const bool have_old = ts.wall_start.size() == hi - lo + 1;
   auto& out = ts.wall_next;
   out.clear();
   ts.wall_start_next.resize(hi - lo + 1);
-  WallBatch& b = ts.wall_batch;
-  b.growTo(kWallBatchContacts + kMaxWallCandidates);
-  const auto M = static_cast<std::int32_t>(table_.materials.size());
+  ts.wall_batch.growTo(kWallBatchContacts + kMaxWallCandidates);
   ts.wall_max = 0;
   ts.wall_bad = -1;
   std::size_t count = 0;  // contacts in the batch: out's last ones
-  WallTouch touch[kMaxWallCandidates];
-  bool accepted[kMaxWallCandidates];
-  int matched_old[kMaxWallCandidates];
   for (std::size_t i = lo; i < hi; ++i) {
     ts.wall_start_next[i - lo] = static_cast<std::int32_t>(out.size());
-    if (!near_plane_[i] && wc_start_[i] == wc_start_[i + 1]) continue;  // most particles: no wall within reach
-    const int nt = meshTouches(i, touch, planeTouches(i, touch, 0));
-    DEMFEM_ASSERT(nt >= 0 && nt <= kMaxWallCandidates);
-    if (nt == 0) continue;
-    acceptDistinct(touch, nt, static_cast<int>(planes_.size()), radius_[i], accepted);
+    const bool near_mesh = wc_start_[i] != wc_start_[i + 1];
+    if (!near_plane_[i] && !near_mesh) continue;  // most particles: no wall within reach
     const WallContact* old = have_old ? ts.wall.data() + ts.wall_start[i - lo] : nullptr;
     const int n_old = have_old ? ts.wall_start[i - lo + 1] - ts.wall_start[i - lo] : 0;
-    matchHistory(old, n_old, touch, nt, accepted, matched_old);
-    for (int a = 0; a < nt; ++a) {
-      if (!accepted[a]) continue;
-      const WallContact& wc = out.emplace_back(openWallContact(i, touch[a], matched_old[a] >= 0 ? old + matched_old[a] : nullptr));
-      const Vec3 vwall = wallVelocity(touch[a]);
-      b.i[count] = static_cast<std::int32_t>(i);
-      b.law[count] = material_[i] * M + wallMaterial(touch[a].wall);
-      b.stiffness[count] = wc.stiffness;
-      b.dist[count] = touch[a].dist;
-      for (int c = 0; c < 3; ++c) {
-        b.n[c][count] = touch[a].normal[c];
-        b.vwall[c][count] = vwall[c];
-      }
-      for (int h = 0; h < L.size; ++h) b.hist[h][count] = wc.hist[h];
-      ++count;
-    }
+    count = near_mesh ? queueWallContacts(i, old, n_old, out, ts.wall_batch, count)
+                      : queuePlaneContacts(i, old, n_old, out, ts.wall_batch, count);
     if (count >= kWallBatchContacts) {
       wallBatchForces<N, R, Shear>(ts, count, out.data() + (out.size() - count), ts.wall_max);
       count = 0;
@@ -329,6 +306,71 @@ void DemSimulation::wallLoop(int part) {
   ts.wall_start_next[hi - lo] = static_cast<std::int32_t>(out.size());
   ts.wall.swap(ts.wall_next);
   ts.wall_start.swap(ts.wall_start_next);
+}
+
+// A contact at batch place `k`: its WallContact (the last of out) and the law's inputs.
+void DemSimulation::queueWallContact(std::size_t i, const WallContact& wc, const Vec3& normal, double dist, const Vec3& vwall,
+                                     WallBatch& b, std::size_t k) const {
+  b.i[k] = static_cast<std::int32_t>(i);
+  b.law[k] = material_[i] * static_cast<std::int32_t>(table_.materials.size()) + wallMaterial(wc.wall);
+  b.stiffness[k] = wc.stiffness;
+  b.dist[k] = dist;
+  for (int c = 0; c < 3; ++c) {
+    b.n[c][k] = normal[c];
+    b.vwall[c][k] = vwall[c];
+  }
+  for (int h = 0; h < layout_.size; ++h) b.hist[h][k] = wc.hist[h];
+}
+
+// The contacts of particle i with every wall feature in reach (fine search, de-duplication,
+// history hand-over) into out and the batch from place `count`; returns the new count.
+std::size_t DemSimulation::queueWallContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out,
+                                             WallBatch& b, std::size_t count) const {
+  WallTouch touch[kMaxWallCandidates];
+  bool accepted[kMaxWallCandidates] = {};  // filled by acceptDistinct (initialised: GCC cannot see it)
+  int matched_old[kMaxWallCandidates];
+  const int nt = meshTouches(i, touch, planeTouches(i, touch, 0));
+  DEMFEM_ASSERT(nt >= 0 && nt <= kMaxWallCandidates);
+  if (nt == 0) return count;
+  acceptDistinct(touch, nt, static_cast<int>(planes_.size()), radius_[i], accepted);
+  matchHistory(old, n_old, touch, nt, accepted, matched_old);
+  for (int a = 0; a < nt; ++a) {
+    if (!accepted[a]) continue;
+    const WallContact& wc = out.emplace_back(openWallContact(i, touch[a], matched_old[a] >= 0 ? old + matched_old[a] : nullptr));
+    queueWallContact(i, wc, touch[a].normal, touch[a].dist, wallVelocity(touch[a]), b, count++);
+  }
+  return count;
+}
+
+// queueWallContacts for a particle with planes only in reach, without its general steps: planes
+// are distinct contacts in plane order, at rest, and a plane's contact continues the particle's
+// last contact with that plane or is new (the steps above give the same).
+std::size_t DemSimulation::queuePlaneContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out,
+                                              WallBatch& b, std::size_t count) const {
+  const double* xi = &x_[3 * i];
+  int touching = 0;
+  for (int p = 0; p < static_cast<int>(planes_.size()) && touching < kMaxWallCandidates; ++p) {
+    const auto& pl = planes_[p];
+    const double dist = (xi[0] - pl.point[0]) * pl.normal[0] + (xi[1] - pl.point[1]) * pl.normal[1] +
+                        (xi[2] - pl.point[2]) * pl.normal[2];
+    if (dist >= radius_[i]) continue;
+    ++touching;
+    WallContact& wc = out.emplace_back();
+    wc.particle = static_cast<std::int32_t>(i);
+    wc.wall = p;
+    wc.nodes[0] = wc.nodes[1] = wc.nodes[2] = -1;
+    const WallContact* last = nullptr;
+    for (int o = 0; o < n_old; ++o)
+      if (old[o].wall == p) last = old + o;
+    if (last) {
+      std::memcpy(wc.hist, last->hist, sizeof(wc.hist));
+      wc.stiffness = last->stiffness;
+    } else {
+      wc.stiffness = wallStiffness(static_cast<int>(i), pl.material);
+    }
+    queueWallContact(i, wc, pl.normal, dist, Vec3{0, 0, 0}, b, count++);
+  }
+  return count;
 }
 
 template <study::NormalModel N, study::RollingModel R, bool Shear>

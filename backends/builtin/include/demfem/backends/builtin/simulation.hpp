@@ -269,6 +269,14 @@ class DemSimulation {
   void sumPairForces(int part);
   void wallForces(int part);
   template <study::NormalModel N, study::RollingModel R, bool Shear> void wallLoop(int part);
+  // The contacts of particle i at batch places count, count + 1, ... (their WallContacts appended
+  // to out; old: its n_old contacts of the last step); each returns the new count.
+  std::size_t queueWallContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out, WallBatch& b,
+                                std::size_t count) const;
+  std::size_t queuePlaneContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out,
+                                 WallBatch& b, std::size_t count) const;
+  void queueWallContact(std::size_t i, const WallContact& wc, const Vec3& normal, double dist, const Vec3& vwall, WallBatch& b,
+                        std::size_t k) const;
   // The law of a wall batch's `count` contacts, whose WallContacts are contacts[0, count): forces to
   // the particles and into the contacts, histories into the contacts, the part's overlap checks.
   template <study::NormalModel N, study::RollingModel R, bool Shear>
