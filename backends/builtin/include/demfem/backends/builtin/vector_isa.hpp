@@ -1,5 +1,5 @@
 // The vector instruction sets the built-in DEM's batch loops are compiled for
-// (backends/builtin/src/pair_forces.cpp; docs/builtin-dem.md, "Performance design").
+// (backends/builtin/src/pair_forces.cpp and wall_forces.cpp; docs/builtin-dem.md, "Performance design").
 //
 // Contract
 // - Every set gives the same numbers bit for bit: the loops do the same IEEE operations in the same
