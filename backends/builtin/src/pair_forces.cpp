@@ -82,12 +82,7 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
     kin.wrel_norm = std::sqrt(norm2(kin.wrel));
     kin.inv_ii = in.inv_inertia[i];
     kin.inv_ij = in.inv_inertia[j];
-    ContactHistory h;
-    if constexpr (L.shear >= 0)
-      for (int c = 0; c < 3; ++c) h.shear[c] = hist[L.shear + c][k];
-    if constexpr (L.delta_max >= 0) h.delta_max = hist[L.delta_max][k];
-    if constexpr (L.roll >= 0)
-      for (int c = 0; c < 3; ++c) h.roll[c] = hist[L.roll + c][k];
+    ContactHistory h = loadBatchHistory<L>(hist, k);
     const ContactResult res =
         contactForce<N, R, Shear>(m, in.laws[in.law[k]], in.stiffness[s], kin, dt, rolling_dt, in.cohesion[k], h, false);
     f0[k] = res.force[0];
@@ -100,11 +95,7 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
     tj1[k] = res.torque_j[1];
     tj2[k] = res.torque_j[2];
     delta[k] = kin.delta;
-    if constexpr (L.shear >= 0)
-      for (int c = 0; c < 3; ++c) hist[L.shear + c][k] = h.shear[c];
-    if constexpr (L.delta_max >= 0) hist[L.delta_max][k] = h.delta_max;
-    if constexpr (L.roll >= 0)
-      for (int c = 0; c < 3; ++c) hist[L.roll + c][k] = h.roll[c];
+    storeBatchHistory<L>(h, hist, k);
   }
 }
 

@@ -127,12 +127,7 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
         contactKinematics<true>(normal, in.dist[k], in.radius[i], 0, &in.v[3 * i], &in.w[3 * i], vwall, nullptr);
     kin.wrel_norm = std::sqrt(norm2(kin.wrel));
     kin.inv_ii = in.inv_inertia[i];
-    ContactHistory h;
-    if constexpr (L.shear >= 0)
-      for (int c = 0; c < 3; ++c) h.shear[c] = hist[L.shear + c][k];
-    if constexpr (L.delta_max >= 0) h.delta_max = hist[L.delta_max][k];
-    if constexpr (L.roll >= 0)
-      for (int c = 0; c < 3; ++c) h.roll[c] = hist[L.roll + c][k];
+    ContactHistory h = loadBatchHistory<L>(hist, k);
     const ContactResult res =
         contactForce<N, R, Shear>(m, in.laws[in.law[k]], in.stiffness[k], kin, dt, rolling_dt, in.cohesion[k], h, true);
     f0[k] = res.force[0];
@@ -142,11 +137,7 @@ template <study::NormalModel N, study::RollingModel R, bool Shear>
     t1[k] = res.torque_i[1];
     t2[k] = res.torque_i[2];
     delta[k] = kin.delta;
-    if constexpr (L.shear >= 0)
-      for (int c = 0; c < 3; ++c) hist[L.shear + c][k] = h.shear[c];
-    if constexpr (L.delta_max >= 0) hist[L.delta_max][k] = h.delta_max;
-    if constexpr (L.roll >= 0)
-      for (int c = 0; c < 3; ++c) hist[L.roll + c][k] = h.roll[c];
+    storeBatchHistory<L>(h, hist, k);
   }
 }
 

@@ -51,6 +51,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 
 namespace demfem::builtin {
@@ -151,6 +152,28 @@ struct ContactHistory {
   if (h.delta_max >= 0) stored[h.delta_max] = in.delta_max;
   if (h.roll >= 0)
     for (int c = 0; c < 3; ++c) stored[h.roll + c] = in.roll[c];
+}
+
+// The same for contact k of a batch that holds its histories by stored offset (hist[offset][k]),
+// with the layout L fixed at compile time: a batch loop then reads and writes contiguous arrays.
+template <HistoryLayout L>
+[[gnu::always_inline]] inline ContactHistory loadBatchHistory(const double* const* hist, std::size_t k) {
+  ContactHistory out;
+  if constexpr (L.shear >= 0)
+    for (int c = 0; c < 3; ++c) out.shear[c] = hist[L.shear + c][k];
+  if constexpr (L.delta_max >= 0) out.delta_max = hist[L.delta_max][k];
+  if constexpr (L.roll >= 0)
+    for (int c = 0; c < 3; ++c) out.roll[c] = hist[L.roll + c][k];
+  return out;
+}
+
+template <HistoryLayout L>
+[[gnu::always_inline]] inline void storeBatchHistory(const ContactHistory& in, double* const* hist, std::size_t k) {
+  if constexpr (L.shear >= 0)
+    for (int c = 0; c < 3; ++c) hist[L.shear + c][k] = in.shear[c];
+  if constexpr (L.delta_max >= 0) hist[L.delta_max][k] = in.delta_max;
+  if constexpr (L.roll >= 0)
+    for (int c = 0; c < 3; ++c) hist[L.roll + c][k] = in.roll[c];
 }
 
 // Geometry and kinematics of one contact, filled by the caller.
