@@ -224,9 +224,7 @@ void DemSimulation::buildWallCandidates(const CellGrid& g) {
   near_plane_.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i)
     for (const auto& pl : planes_) {
-      const double dist = (x_[3 * i] - pl.point[0]) * pl.normal[0] + (x_[3 * i + 1] - pl.point[1]) * pl.normal[1] +
-                          (x_[3 * i + 2] - pl.point[2]) * pl.normal[2];
-      if (dist < radius_[i] + skin_) near_plane_[i] = 1;
+      if (pl.distance(&x_[3 * i]) < radius_[i] + skin_) near_plane_[i] = 1;
     }
 }
 

@@ -159,8 +159,7 @@ int DemSimulation::planeTouches(std::size_t i, WallTouch* touch, int nt) const {
   const double* xi = &x_[3 * i];
   for (int p = 0; p < static_cast<int>(planes_.size()); ++p) {
     const auto& pl = planes_[p];
-    const double dist = (xi[0] - pl.point[0]) * pl.normal[0] + (xi[1] - pl.point[1]) * pl.normal[1] +
-                        (xi[2] - pl.point[2]) * pl.normal[2];
+    const double dist = pl.distance(xi);
     if (dist >= radius_[i] || nt == kMaxWallCandidates) continue;
     touch[nt++] = WallTouch{p, 0, FeatureKind::Face, {xi[0] - dist * pl.normal[0], xi[1] - dist * pl.normal[1], xi[2] - dist * pl.normal[2]},
                             pl.normal, dist, {-1, -1, -1}, {0, 0, 0}};
@@ -342,8 +341,7 @@ std::size_t DemSimulation::queuePlaneContacts(std::size_t i, const WallContact* 
   int touching = 0;
   for (int p = 0; p < static_cast<int>(planes_.size()) && touching < kMaxWallCandidates; ++p) {
     const auto& pl = planes_[p];
-    const double dist = (xi[0] - pl.point[0]) * pl.normal[0] + (xi[1] - pl.point[1]) * pl.normal[1] +
-                        (xi[2] - pl.point[2]) * pl.normal[2];
+    const double dist = pl.distance(xi);
     if (dist >= radius_[i]) continue;
     ++touching;
     WallContact& wc = out.emplace_back();

@@ -68,6 +68,10 @@ struct PlaneWall {
   Vec3 normal{0, 1, 0};  // unit, pointing into the particle side
   int material = 0;
   std::int32_t padding = 0;  // named: a checkpoint holds the struct's bytes, none of them undefined
+  // Signed distance (m) of the point x[0..2] from the plane, positive on the particle side.
+  double distance(const double* x) const {
+    return (x[0] - point[0]) * normal[0] + (x[1] - point[1]) * normal[1] + (x[2] - point[2]) * normal[2];
+  }
 };
 
 struct Domain {
