@@ -216,8 +216,9 @@ std::size_t DemSimulation::findTouching(std::size_t i0, std::size_t i1, [[maybe_
   double* hist[H > 0 ? H : 1];
   for (int c = 0; c < H; ++c) hist[c] = b.hist[c].data();
   const auto M = static_cast<std::int32_t>(table_.materials.size());
+  const std::int32_t end = nb_start_[i1];  // read once: the stores below could alias nb_start_
   std::size_t count = 0;
-  for (std::int32_t s = nb_start_[i0]; s < nb_start_[i1]; ++s) {
+  for (std::int32_t s = nb_start_[i0]; s < end; ++s) {
     const std::int32_t i = nb_i[s], j = nb_j[s];
     DEMFEM_ASSERT(static_cast<std::size_t>(i) >= i0 && static_cast<std::size_t>(i) < i1 && j > i &&
                   static_cast<std::size_t>(j) < window_end);

@@ -3,6 +3,7 @@
 // output live in their own files of this folder; the threads in thread_team.hpp.
 #include "demfem/backends/builtin/simulation.hpp"
 
+#include "vectorised_loop.hpp"
 #include "demfem/backends/physics/dem_assert.hpp"
 
 #include <algorithm>
@@ -226,41 +227,51 @@ void DemSimulation::step(bool drift_ahead) {
   drifted_ = drift_ahead;
 }
 
-bool DemSimulation::VerletSweep::healthy(std::size_t i) const {
-  bool ok = true;
-  for (int c = 0; c < 3; ++c) {
-    const double xc = x[3 * i + c];
-    ok &= std::isfinite(xc) & std::isfinite(v[3 * i + c]) & std::isfinite(w[3 * i + c]);
-    ok &= (xc >= domain.lo[c]) & (xc <= domain.hi[c]);
-  }
-  return ok;
-}
-
-// The largest move as a maximum instead of a branch per particle.
+// The two sweeps are vectorised across particles (runVectorised, as the contact loops; this file
+// is compiled without fused multiply-adds, so every instruction set gives the same bits). Their
+// checks are flags or-ed over the particles, not branches per particle, nor a maximum of doubles
+// (which GCC vectorises only under fast-math): the skin check asks whether any particle moved
+// farther than half the skin, which is what the largest move was compared with.
 void DemSimulation::drift(int part) {
   const VerletSweep s = verletSweep();
   const ForceReset reset = forceReset();
-  double max_d2 = 0;
-  for (std::size_t i = rangeBegin(part); i < rangeEnd(part); ++i) {
-    s.halfKick(i);
-    const double d2 = s.move(i);
-    max_d2 = d2 > max_d2 ? d2 : max_d2;
-    reset(i, s.f, s.t);
-  }
-  part_[part].moved = max_d2 > 0.25 * skin_ * skin_;
+  const double limit_d2 = 0.25 * skin_ * skin_;
+  const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
+  std::int64_t moved = 0;
+  const auto sweep = [&]<bool Damped>() {
+    runVectorised([&]() DEMFEM_INLINE {
+      std::int64_t any = 0;
+      DEMFEM_INDEPENDENT_ITERATIONS
+      for (std::size_t i = lo; i < hi; ++i) {
+        s.halfKick(i);
+        any |= s.move(i) > limit_d2 ? 1 : 0;
+        reset.apply<Damped>(i, s.f, s.t);
+      }
+      moved = any;
+    });
+  };
+  if (reset.damped())
+    sweep.template operator()<true>();
+  else
+    sweep.template operator()<false>();
+  part_[part].moved = moved != 0;
 }
 
-// The health check without a branch per particle; only when it finds a particle wrong does a
-// second pass name the first.
+// Only when the health check finds a particle wrong does a second pass name the first.
 void DemSimulation::kick(int part) {
   const VerletSweep s = verletSweep();
   const std::size_t lo = rangeBegin(part), hi = rangeEnd(part);
-  bool all = true;
-  for (std::size_t i = lo; i < hi; ++i) {
-    s.halfKick(i);
-    all &= s.healthy(i);
-  }
-  if (all || part_[part].kick_bad >= 0) return;
+  std::int64_t sick = 0;
+  runVectorised([&]() DEMFEM_INLINE {
+    std::int64_t any = 0;
+    DEMFEM_INDEPENDENT_ITERATIONS
+    for (std::size_t i = lo; i < hi; ++i) {
+      s.halfKick(i);
+      any |= s.healthy(i) ? 0 : 1;
+    }
+    sick = any;
+  });
+  if (sick == 0 || part_[part].kick_bad >= 0) return;
   for (std::size_t i = lo; i < hi; ++i)
     if (!s.healthy(i)) {
       part_[part].kick_bad = static_cast<std::int64_t>(i);

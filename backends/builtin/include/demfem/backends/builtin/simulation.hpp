@@ -309,16 +309,26 @@ class DemSimulation {
     const double *mass, *v, *w, *inv_inertia;
     Vec3 gravity;
     double damping_per_s;
-    void operator()(std::size_t i, double* f, double* t) const {
+    bool damped() const { return damping_per_s > 0; }
+    // With the damping's branch taken out of the loop (Damped == damped()): a loop without
+    // control flow vectorises.
+    template <bool Damped>
+    [[gnu::always_inline]] void apply(std::size_t i, double* f, double* t) const {
       for (int c = 0; c < 3; ++c) {
         f[3 * i + c] = mass[i] * gravity[c];
         t[3 * i + c] = 0;
       }
-      if (damping_per_s > 0)
+      if constexpr (Damped)
         for (int c = 0; c < 3; ++c) {
           f[3 * i + c] -= damping_per_s * mass[i] * v[3 * i + c];
           t[3 * i + c] -= damping_per_s * w[3 * i + c] / inv_inertia[i];
         }
+    }
+    void operator()(std::size_t i, double* f, double* t) const {
+      if (damped())
+        apply<true>(i, f, t);
+      else
+        apply<false>(i, f, t);
     }
   };
   ForceReset forceReset() const {
@@ -331,14 +341,14 @@ class DemSimulation {
     double *x, *v, *w, *f, *t;
     const double *x_build, *inv_mass, *inv_inertia;
     Domain domain;
-    void halfKick(std::size_t i) const {
+    [[gnu::always_inline]] void halfKick(std::size_t i) const {
       for (int c = 0; c < 3; ++c) {
         v[3 * i + c] += half * f[3 * i + c] * inv_mass[i];
         w[3 * i + c] += half * t[3 * i + c] * inv_inertia[i];
       }
     }
     // x += dt v; returns the squared distance from the position at the last list build.
-    double move(std::size_t i) const {
+    [[gnu::always_inline]] double move(std::size_t i) const {
       double d2 = 0;
       for (int c = 0; c < 3; ++c) {
         x[3 * i + c] += dt * v[3 * i + c];
@@ -348,7 +358,15 @@ class DemSimulation {
       return d2;
     }
     // Finite and inside the domain (the health check after the second half kick), without branches.
-    bool healthy(std::size_t i) const;
+    [[gnu::always_inline]] bool healthy(std::size_t i) const {
+      bool ok = true;
+      for (int c = 0; c < 3; ++c) {
+        const double xc = x[3 * i + c];
+        ok &= std::isfinite(xc) & std::isfinite(v[3 * i + c]) & std::isfinite(w[3 * i + c]);
+        ok &= (xc >= domain.lo[c]) & (xc <= domain.hi[c]);
+      }
+      return ok;
+    }
   };
   VerletSweep verletSweep() {
     return {0.5 * dt_, dt_, x_.data(), v_.data(), w_.data(), f_.data(), t_.data(), x_build_.data(), inv_mass_.data(),
