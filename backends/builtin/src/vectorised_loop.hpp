@@ -1,5 +1,6 @@
-// Private to the built-in DEM: how its batch loops over contacts are compiled (pair_forces.cpp,
-// wall_forces.cpp; docs/builtin-dem.md, "Performance design"). A batch loop is an always-inline
+// Private to the built-in DEM: how its batch loops over contacts (pair_forces.cpp, wall_forces.cpp)
+// and its Verlet sweeps over particles (simulation.cpp) are compiled (docs/builtin-dem.md,
+// "Performance design"). A batch loop is an always-inline
 // lambda run by runVectorised, which compiles it anew for each vector instruction set and runs the
 // one vectorIsa() names; its iterations are marked independent so that GCC vectorises it.
 #pragma once
