@@ -11,11 +11,15 @@
 // critical step, the same step the drag is timed with, settled to a total kinetic energy of 1e-3 J
 // (--settle-J: timing needs a bin at rest, not a study's 1e-6 J, which the soft EDEM spring never
 // reaches within the deposition's time cap). The tool is inserted to its depth (untimed), then
-// every thread count is timed over the same number of drag steps from that same state, in
-// interleaved rounds (1 2 1 2 ...: a machine shared with other work slows all counts alike), with
-// the process CPU time beside the wall time. With --compete each count is also timed beside a
-// competing busy process (one more runnable process than the 2 cores hold), which is where a
-// spinning thread team collapses. With --twin each round also times two copies of the 1-thread run in
+// every thread count is timed over the same number of drag steps from that same state, with the
+// process CPU time beside the wall time. Within a round the thread counts take turns every
+// --slice-steps steps (1 2, 2 1, 1 2, ...), so that a machine whose speed drifts, as a VM's does
+// by 10 % within seconds, slows every count alike and their ratio holds still; the first
+// --warmup-steps of each simulation (its lists, and the thread team timing its two ways of running
+// a phase for the first time: a cost once per simulation, which a study's run of 10^4-10^5 steps
+// does not feel) are not timed. With --compete each count is also timed beside a competing busy
+// process (one more runnable process than the 2 cores hold), which is where a spinning thread team
+// collapses. With --twin each round also times two copies of the 1-thread run in
 // two processes at once: the work of both over the time the slower took is what the machine's two
 // cores give when nothing is shared but the hardware (caches, memory, and on a VM whatever the host
 // shares), the ceiling for 2 threads. Prints a table of every timing and the medians and ratios per
@@ -136,20 +140,30 @@ const char* modeSentence(Mode m) {
 // Processor time of every thread of this process so far.
 double processCpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
-// Times `steps` steps of `sim`, beside a competing busy process if `compete`: wall time and the
-// process CPU time of all its threads (the competitor is another process; on a shared machine wall
-// time also counts the waiting for a core).
-Timing timeRun(DemSimulation& sim, long steps, bool compete) {
+// Times `steps` steps of each simulation of `sims` (one per thread count, from the same state),
+// beside a competing busy process if `compete`, in turns of `slice` steps (A B, B A, A B, ...):
+// per simulation the wall time and the process CPU time of all threads over its turns (only one
+// simulation runs at a time; the competitor is another process, and on a shared machine wall time
+// also counts the waiting for a core).
+std::vector<Timing> timeInTurns(std::vector<DemSimulation>& sims, long steps, long slice, bool compete) {
   std::unique_ptr<Competitor> competitor;
   if (compete) competitor = std::make_unique<Competitor>();
-  const auto t0 = std::chrono::steady_clock::now();
-  const double c0 = processCpuSeconds();
-  sim.run(steps);
-  Timing t;
-  t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  t.cpu_s = processCpuSeconds() - c0;
-  t.rate = static_cast<double>(sim.particleCount()) * static_cast<double>(steps) / t.wall_s;
-  return t;
+  std::vector<Timing> timings(sims.size());
+  long turn = 0;
+  for (long done = 0; done < steps; done += slice, ++turn) {
+    const long n = std::min(slice, steps - done);
+    for (std::size_t k = 0; k < sims.size(); ++k) {
+      const std::size_t s = turn % 2 == 0 ? k : sims.size() - 1 - k;
+      const auto t0 = std::chrono::steady_clock::now();
+      const double c0 = processCpuSeconds();
+      sims[s].run(n);
+      timings[s].wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      timings[s].cpu_s += processCpuSeconds() - c0;
+    }
+  }
+  for (std::size_t s = 0; s < sims.size(); ++s)
+    timings[s].rate = static_cast<double>(sims[s].particleCount()) * static_cast<double>(steps) / timings[s].wall_s;
+  return timings;
 }
 
 // Runs `steps` steps of `sim` (1 thread: no team threads to lose in the fork) here and in a forked
@@ -211,7 +225,15 @@ int main(int argc, char** argv) {
                  "Kinetic energy (J) below which the benchmark soil counts as settled")
       ->check(CLI::PositiveNumber);
   int rounds = 3;
-  app.add_option("--rounds", rounds, "Interleaved rounds: every thread count once per round")->check(CLI::PositiveNumber);
+  app.add_option("--rounds", rounds, "Rounds: every thread count once per round")->check(CLI::PositiveNumber);
+  long slice_steps = 250;
+  app.add_option("--slice-steps", slice_steps, "Steps per turn: within a round the thread counts take turns (default 250)")
+      ->check(CLI::PositiveNumber);
+  long warmup_steps = 10;
+  app.add_option("--warmup-steps", warmup_steps,
+                 "Untimed steps of each simulation before its timing: lists, first forces and the thread team's first "
+                 "timing of its two ways (default 10)")
+      ->check(CLI::NonNegativeNumber);
   bool compete = false;
   app.add_flag("--compete", compete, "Also time every thread count beside a competing busy process");
   bool twin = false;
@@ -245,6 +267,8 @@ int main(int argc, char** argv) {
     nlohmann::json report{{"study", study_file},
                           {"steps", steps},
                           {"rounds", rounds},
+                          {"slice_steps", slice_steps},
+                          {"warmup_steps", warmup_steps},
                           {"load_average_1min_start", loadAverage()},
                           {"vector_isa", vectorIsaName(vectorIsa())},
                           {"cases", nlohmann::json::array()},
@@ -297,36 +321,49 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < sim.particleCount(); ++i) states.push_back(sim.particle(i));
         origin = sim.mesh(m).offset(sim.time());
       }
-      // Interleaved rounds: every (threads, mode) variant once per round, the same soil state.
-      std::vector<std::pair<int, Mode>> variants;
-      for (const Mode mode : compete ? std::vector<Mode>{Mode::Alone, Mode::BesideBusy} : std::vector<Mode>{Mode::Alone})
-        for (const int threads : thread_counts) variants.emplace_back(threads, mode);
-      if (twin) variants.emplace_back(1, Mode::Twin);
+      // Per round: the thread counts in turns, alone and with --compete beside a busy process, then
+      // with --twin the two 1-thread processes; every simulation from the same soil state.
+      std::vector<Mode> modes{Mode::Alone};
+      if (compete) modes.push_back(Mode::BesideBusy);
       std::map<std::pair<int, Mode>, std::vector<Timing>> timings;
-      for (int round = 0; round < rounds; ++round)
-        for (const auto& [threads, mode] : variants) {
-          DemSimulation sim = makeBin(st, states, threads, origin);
-          sim.setTimeStep(physics::demTimeStep(st).step_s);
-          sim.run(10);  // lists and first forces outside the timing
-          const Timing t = mode == Mode::Twin ? runTwins(sim, steps) : timeRun(sim, steps, mode == Mode::BesideBusy);
-          timings[{threads, mode}].push_back(t);
-          if (text)
-            std::printf("%-42s %9zu %7d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(),
-                        threads, modeName(mode), round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate, sim.bytesPerParticle(),
-                        sim.contactCount());
-          report["cases"].push_back({{"model", c.label},
-                                     {"particles", sim.particleCount()},
-                                     {"threads", threads},
-                                     {"competing_process", mode == Mode::BesideBusy},
-                                     {"twin_processes", mode == Mode::Twin},
-                                     {"round", round + 1},
-                                     {"dt_s", sim.timeStep()},
-                                     {"wall_s", t.wall_s},
-                                     {"cpu_s", t.cpu_s},
-                                     {"particle_steps_per_s", t.rate},
-                                     {"bytes_per_particle", sim.bytesPerParticle()},
-                                     {"contacts", sim.contactCount()}});
+      const auto warmedUp = [&](int threads) {
+        DemSimulation sim = makeBin(st, states, threads, origin);
+        sim.setTimeStep(physics::demTimeStep(st).step_s);
+        sim.run(warmup_steps);
+        return sim;
+      };
+      const auto record = [&](const DemSimulation& sim, int threads, Mode mode, int round, const Timing& t) {
+        timings[{threads, mode}].push_back(t);
+        if (text)
+          std::printf("%-42s %9zu %7d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(), threads,
+                      modeName(mode), round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate, sim.bytesPerParticle(), sim.contactCount());
+        report["cases"].push_back({{"model", c.label},
+                                   {"particles", sim.particleCount()},
+                                   {"threads", threads},
+                                   {"competing_process", mode == Mode::BesideBusy},
+                                   {"twin_processes", mode == Mode::Twin},
+                                   {"round", round + 1},
+                                   {"dt_s", sim.timeStep()},
+                                   {"simulated_time_s", sim.time()},
+                                   {"wall_s", t.wall_s},
+                                   {"cpu_s", t.cpu_s},
+                                   {"particle_steps_per_s", t.rate},
+                                   {"bytes_per_particle", sim.bytesPerParticle()},
+                                   {"contacts", sim.contactCount()}});
+      };
+      for (int round = 0; round < rounds; ++round) {
+        for (const Mode mode : modes) {
+          std::vector<DemSimulation> sims;
+          sims.reserve(thread_counts.size());
+          for (const int threads : thread_counts) sims.push_back(warmedUp(threads));
+          const std::vector<Timing> t = timeInTurns(sims, steps, slice_steps, mode == Mode::BesideBusy);
+          for (std::size_t k = 0; k < sims.size(); ++k) record(sims[k], thread_counts[k], mode, round, t[k]);
         }
+        if (twin) {
+          DemSimulation sim = warmedUp(1);
+          record(sim, 1, Mode::Twin, round, runTwins(sim, steps));
+        }
+      }
       // Per variant: median rate; against the first thread count of the same round (beside the
       // competitor for the variants beside it, alone for the rest): the ratio per round, its median
       // and its smallest value.

@@ -22,18 +22,32 @@ fs::path smallStudy(const fs::path& dir) {
 
 }  // namespace
 
-TEST_CASE("builtin_bench --twin times two 1-thread processes and counts the work of both", "[bench]") {
+TEST_CASE("builtin_bench times the thread counts in turns over all their steps and --twin counts the work of both processes",
+          "[bench]") {
   const fs::path dir = freshDir("bench_builtin_twin");
-  constexpr int kSteps = 40;
+  constexpr int kSteps = 40;  // turns of 15, 15 and 10 steps
   const nlohmann::json doc = jsonStdout({BUILTIN_BENCH, "--study", smallStudy(dir).string(), "--soil-dir", (dir / "soil").string(),
                                          "--steps", std::to_string(kSteps), "--rounds", "2", "--threads", "1", "2", "--twin",
-                                         "--model", "hooke+history+cdt", "--json", "-"},
+                                         "--slice-steps", "15", "--warmup-steps", "5", "--model", "hooke+history+cdt", "--json", "-"},
                                         dir / "builtin_bench");
+  CHECK(doc.at("slice_steps") == 15);
+  CHECK(doc.at("warmup_steps") == 5);
   std::vector<nlohmann::json> twins, alone_1;
+  int in_turns = 0;
   for (const auto& c : doc.at("cases")) {
-    if (c.at("twin_processes").get<bool>()) twins.push_back(c);
-    if (!c.at("twin_processes").get<bool>() && !c.at("competing_process").get<bool>() && c.at("threads") == 1) alone_1.push_back(c);
+    if (c.at("twin_processes").get<bool>()) {
+      twins.push_back(c);
+      continue;
+    }
+    if (!c.at("competing_process").get<bool>() && c.at("threads") == 1) alone_1.push_back(c);
+    // The warm-up and every turn ran, and the rate is all the steps of the count's turns over the
+    // time of its turns alone.
+    CHECK(c.at("simulated_time_s").get<double>() == Approx((5 + kSteps) * c.at("dt_s").get<double>()).epsilon(1e-9));
+    const double rate = c.at("particles").get<double>() * kSteps / c.at("wall_s").get<double>();
+    CHECK(c.at("particle_steps_per_s").get<double>() == Approx(rate).epsilon(1e-12));
+    ++in_turns;
   }
+  CHECK(in_turns == 4);        // 1 and 2 threads, two rounds
   REQUIRE(twins.size() == 2);  // one per round
   REQUIRE(alone_1.size() == 2);
   for (std::size_t r = 0; r < twins.size(); ++r) {
