@@ -25,6 +25,7 @@ using detail::norm2;
 namespace {
 constexpr int kMaxWallCandidates = 32;  // touching features per particle before de-duplication
 constexpr std::size_t kWallBatchContacts = 128;  // contacts per batch (a particle's are not split)
+constexpr double kNoHistory[HistoryLayout::kMaxSize] = {};  // a new contact's history
 constexpr double kSameContact = 1e-6;    // contact points closer than this * radius are one contact
 }  // namespace
 
@@ -278,43 +279,51 @@ void DemSimulation::wallLoop(int part) {
   ts.wall_batch.growTo(kWallBatchContacts + kMaxWallCandidates);
   ts.wall_max = 0;
   ts.wall_bad = -1;
-  std::size_t count = 0;  // contacts in the batch: out's last ones
+  // Contacts in the batch (out's last ones) and in out, counted here rather than read back from
+  // out after each particle (for the reason in queueWallContact).
+  std::size_t count = 0, size = 0;
   for (std::size_t i = lo; i < hi; ++i) {
-    ts.wall_start_next[i - lo] = static_cast<std::int32_t>(out.size());
+    ts.wall_start_next[i - lo] = static_cast<std::int32_t>(size);
     const bool near_mesh = wc_start_[i] != wc_start_[i + 1];
     if (!near_plane_[i] && !near_mesh) continue;  // most particles: no wall within reach
     const WallContact* old = have_old ? ts.wall.data() + ts.wall_start[i - lo] : nullptr;
     const int n_old = have_old ? ts.wall_start[i - lo + 1] - ts.wall_start[i - lo] : 0;
-    count = near_mesh ? queueWallContacts(i, old, n_old, out, ts.wall_batch, count)
-                      : queuePlaneContacts(i, old, n_old, out, ts.wall_batch, count);
+    const std::size_t queued = near_mesh ? queueWallContacts(i, old, n_old, out, ts.wall_batch, count)
+                                         : queuePlaneContacts(i, old, n_old, out, ts.wall_batch, count);
+    size += queued - count;
+    count = queued;
     if (count >= kWallBatchContacts) {
-      wallBatchForces<N, R, Shear>(ts, count, out.data() + (out.size() - count), ts.wall_max);
+      wallBatchForces<N, R, Shear>(ts, count, out.data() + (size - count), ts.wall_max);
       count = 0;
     }
   }
-  if (count > 0) wallBatchForces<N, R, Shear>(ts, count, out.data() + (out.size() - count), ts.wall_max);
-  ts.wall_start_next[hi - lo] = static_cast<std::int32_t>(out.size());
+  DEMFEM_ASSERT(size == out.size());
+  if (count > 0) wallBatchForces<N, R, Shear>(ts, count, out.data() + (size - count), ts.wall_max);
+  ts.wall_start_next[hi - lo] = static_cast<std::int32_t>(size);
   ts.wall.swap(ts.wall_next);
   ts.wall_start.swap(ts.wall_start_next);
 }
 
-// A contact at batch place `k`: its WallContact (the last of out) and the law's inputs.
-void DemSimulation::queueWallContact(std::size_t i, const WallContact& wc, const Vec3& normal, double dist, const Vec3& vwall,
-                                     WallBatch& b, std::size_t k) const {
+// A contact of particle i with wall `wall` at batch place `k`: the law's inputs, the stiffness and
+// history read from where they come from (the last step's contact, or a new contact's) rather than
+// back from the WallContact just appended to out: loads of memory stored a moment before are what
+// the wall loop waited on, once per contact and step (docs/builtin-dem.md, "The wall loop's stores").
+void DemSimulation::queueWallContact(std::size_t i, int wall, const ContactStiffness& stiffness, const double* hist,
+                                     const Vec3& normal, double dist, const Vec3& vwall, WallBatch& b, std::size_t k) const {
   b.i[k] = static_cast<std::int32_t>(i);
-  b.law[k] = material_[i] * static_cast<std::int32_t>(table_.materials.size()) + wallMaterial(wc.wall);
-  b.stiffness[k] = wc.stiffness;
+  b.law[k] = material_[i] * static_cast<std::int32_t>(table_.materials.size()) + wallMaterial(wall);
+  b.stiffness[k] = stiffness;
   b.dist[k] = dist;
   for (int c = 0; c < 3; ++c) {
     b.n[c][k] = normal[c];
     b.vwall[c][k] = vwall[c];
   }
-  for (int h = 0; h < layout_.size; ++h) b.hist[h][k] = wc.hist[h];
+  for (int h = 0; h < layout_.size; ++h) b.hist[h][k] = hist[h];
 }
 
 // The contacts of particle i with every wall feature in reach (fine search, de-duplication,
 // history hand-over) into out and the batch from place `count`; returns the new count.
-std::size_t DemSimulation::queueWallContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out,
+std::size_t DemSimulation::queueWallContacts(std::size_t i, const WallContact* old, int n_old, WallContacts& out,
                                              WallBatch& b, std::size_t count) const {
   WallTouch touch[kMaxWallCandidates];
   bool accepted[kMaxWallCandidates] = {};  // filled by acceptDistinct (initialised: GCC cannot see it)
@@ -326,8 +335,10 @@ std::size_t DemSimulation::queueWallContacts(std::size_t i, const WallContact* o
   matchHistory(old, n_old, touch, nt, accepted, matched_old);
   for (int a = 0; a < nt; ++a) {
     if (!accepted[a]) continue;
-    const WallContact& wc = out.emplace_back(openWallContact(i, touch[a], matched_old[a] >= 0 ? old + matched_old[a] : nullptr));
-    queueWallContact(i, wc, touch[a].normal, touch[a].dist, wallVelocity(touch[a]), b, count++);
+    const WallContact* last = matched_old[a] >= 0 ? old + matched_old[a] : nullptr;
+    const WallContact& wc = out.emplace_back(openWallContact(i, touch[a], last));
+    queueWallContact(i, touch[a].wall, last ? last->stiffness : wc.stiffness, last ? last->hist : kNoHistory, touch[a].normal,
+                     touch[a].dist, wallVelocity(touch[a]), b, count++);
   }
   return count;
 }
@@ -335,7 +346,7 @@ std::size_t DemSimulation::queueWallContacts(std::size_t i, const WallContact* o
 // queueWallContacts for a particle with planes only in reach, without its general steps: planes
 // are distinct contacts in plane order, at rest, and a plane's contact continues the particle's
 // last contact with that plane or is new (the steps above give the same).
-std::size_t DemSimulation::queuePlaneContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out,
+std::size_t DemSimulation::queuePlaneContacts(std::size_t i, const WallContact* old, int n_old, WallContacts& out,
                                               WallBatch& b, std::size_t count) const {
   const double* xi = &x_[3 * i];
   int touching = 0;
@@ -344,20 +355,22 @@ std::size_t DemSimulation::queuePlaneContacts(std::size_t i, const WallContact* 
     const double dist = pl.distance(xi);
     if (dist >= radius_[i]) continue;
     ++touching;
-    WallContact& wc = out.emplace_back();
-    wc.particle = static_cast<std::int32_t>(i);
-    wc.wall = p;
-    wc.nodes[0] = wc.nodes[1] = wc.nodes[2] = -1;
     const WallContact* last = nullptr;
     for (int o = 0; o < n_old; ++o)
       if (old[o].wall == p) last = old + o;
-    if (last) {
-      std::memcpy(wc.hist, last->hist, sizeof(wc.hist));
-      wc.stiffness = last->stiffness;
-    } else {
-      wc.stiffness = wallStiffness(static_cast<int>(i), pl.material);
-    }
-    queueWallContact(i, wc, pl.normal, dist, Vec3{0, 0, 0}, b, count++);
+    const ContactStiffness fresh = last ? ContactStiffness{} : wallStiffness(static_cast<int>(i), pl.material);
+    const ContactStiffness& stiffness = last ? last->stiffness : fresh;
+    const double* const hist = last ? last->hist : kNoHistory;
+    queueWallContact(i, p, stiffness, hist, pl.normal, dist, Vec3{0, 0, 0}, b, count++);
+    WallContact& wc = out.emplace_back();  // uninitialised: every field is written here
+    wc.particle = static_cast<std::int32_t>(i);
+    wc.wall = p;
+    wc.key = 0;
+    std::memcpy(wc.hist, hist, sizeof(wc.hist));
+    wc.stiffness = stiffness;
+    wc.nodes[0] = wc.nodes[1] = wc.nodes[2] = -1;
+    wc.padding = 0;
+    for (int c = 0; c < 3; ++c) wc.weights[c] = wc.force[c] = 0;
   }
   return count;
 }

@@ -40,8 +40,12 @@
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
+#include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace demfem::builtin {
@@ -109,6 +113,31 @@ struct WallBatch {
   std::vector<double> n[3], dist, vwall[3], cohesion, delta;
   std::vector<double> f[3], t[3], hist[HistoryLayout::kMaxSize];
   void growTo(std::size_t contacts);  // every array at least `contacts` long (never shrinks)
+};
+
+// An allocator that leaves an element appended without a value uninitialised (default
+// initialisation) instead of clearing it first, for vectors whose every element is then written
+// field by field: the wall loop's contact lists, one element per wall contact and step, where the
+// clearing (a string store) held up the loads after it (docs/builtin-dem.md, "The wall loop's
+// stores").
+template <class T>
+class DefaultInitAllocator : public std::allocator<T> {
+ public:
+  template <class U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  DefaultInitAllocator() = default;
+  template <class U>
+  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
 };
 
 class DemSimulation {
@@ -207,6 +236,8 @@ class DemSimulation {
     double force[3];                // on the particle
   };
 
+  using WallContacts = std::vector<WallContact, DefaultInitAllocator<WallContact>>;
+
   // What one part (partition of the particles) keeps from step to step (memory reused) and reports
   // to the step; whichever thread runs the part uses it.
   struct PartState {
@@ -215,7 +246,7 @@ class DemSimulation {
     // their CSR offsets over the part's particles (empty before the first). The wall loop builds
     // the next ones in wall_next / wall_start_next from these and swaps: a part's contacts stay
     // with the thread that ran it, never gathered into one array (docs/builtin-dem.md).
-    std::vector<WallContact> wall, wall_next;
+    WallContacts wall, wall_next;
     std::vector<std::int32_t> wall_start, wall_start_next;
     std::vector<std::int32_t> rows;      // list build: the neighbours of its rows
     PairBatch batch;                     // pair loop: the touching contacts of a batch of rows
@@ -275,12 +306,12 @@ class DemSimulation {
   template <study::NormalModel N, study::RollingModel R, bool Shear> void wallLoop(int part);
   // The contacts of particle i at batch places count, count + 1, ... (their WallContacts appended
   // to out; old: its n_old contacts of the last step); each returns the new count.
-  std::size_t queueWallContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out, WallBatch& b,
+  std::size_t queueWallContacts(std::size_t i, const WallContact* old, int n_old, WallContacts& out, WallBatch& b,
                                 std::size_t count) const;
-  std::size_t queuePlaneContacts(std::size_t i, const WallContact* old, int n_old, std::vector<WallContact>& out,
+  std::size_t queuePlaneContacts(std::size_t i, const WallContact* old, int n_old, WallContacts& out,
                                  WallBatch& b, std::size_t count) const;
-  void queueWallContact(std::size_t i, const WallContact& wc, const Vec3& normal, double dist, const Vec3& vwall, WallBatch& b,
-                        std::size_t k) const;
+  void queueWallContact(std::size_t i, int wall, const ContactStiffness& stiffness, const double* hist, const Vec3& normal,
+                        double dist, const Vec3& vwall, WallBatch& b, std::size_t k) const;
   // The law of a wall batch's `count` contacts, whose WallContacts are contacts[0, count): forces to
   // the particles and into the contacts, histories into the contacts, the part's overlap checks.
   template <study::NormalModel N, study::RollingModel R, bool Shear>
