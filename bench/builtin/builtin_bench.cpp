@@ -15,9 +15,9 @@
 // process CPU time beside the wall time. Within a round the thread counts take turns every
 // --slice-steps steps (1 2, 2 1, 1 2, ...), so that a machine whose speed drifts, as a VM's does
 // by 10 % within seconds, slows every count alike and their ratio holds still; the first
-// --warmup-steps of each simulation (its lists, and the thread team timing its two ways of running
-// a phase for the first time: a cost once per simulation, which a study's run of 10^4-10^5 steps
-// does not feel) are not timed. With --compete each count is also timed beside a competing busy
+// --warmup-steps of each simulation are not timed (10 by default: its lists and first forces;
+// about 130 also leave out the thread team's first timing of its two ways of running a phase, a
+// cost once per simulation). With --compete each count is also timed beside a competing busy
 // process (one more runnable process than the 2 cores hold), which is where a spinning thread team
 // collapses. With --twin each round also times two copies of the 1-thread run in
 // two processes at once: the work of both over the time the slower took is what the machine's two
@@ -231,8 +231,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   long warmup_steps = 10;
   app.add_option("--warmup-steps", warmup_steps,
-                 "Untimed steps of each simulation before its timing: lists, first forces and the thread team's first "
-                 "timing of its two ways (default 10)")
+                 "Untimed steps of each simulation before its timing (default 10: its lists and first forces; about 130 "
+                 "also leave out the thread team's first timing of its two ways)")
       ->check(CLI::NonNegativeNumber);
   bool compete = false;
   app.add_flag("--compete", compete, "Also time every thread count beside a competing busy process");
@@ -326,11 +326,11 @@ int main(int argc, char** argv) {
       std::vector<Mode> modes{Mode::Alone};
       if (compete) modes.push_back(Mode::BesideBusy);
       std::map<std::pair<int, Mode>, std::vector<Timing>> timings;
-      const auto warmedUp = [&](int threads) {
-        DemSimulation sim = makeBin(st, states, threads, origin);
+      // Warmed up where it is timed: a simulation moved or copied gets a new thread team, which
+      // starts its timing of the two ways afresh.
+      const auto warmUp = [&](DemSimulation& sim) {
         sim.setTimeStep(physics::demTimeStep(st).step_s);
         sim.run(warmup_steps);
-        return sim;
       };
       const auto record = [&](const DemSimulation& sim, int threads, Mode mode, int round, const Timing& t) {
         timings[{threads, mode}].push_back(t);
@@ -355,12 +355,14 @@ int main(int argc, char** argv) {
         for (const Mode mode : modes) {
           std::vector<DemSimulation> sims;
           sims.reserve(thread_counts.size());
-          for (const int threads : thread_counts) sims.push_back(warmedUp(threads));
+          for (const int threads : thread_counts) sims.push_back(makeBin(st, states, threads, origin));
+          for (auto& sim : sims) warmUp(sim);
           const std::vector<Timing> t = timeInTurns(sims, steps, slice_steps, mode == Mode::BesideBusy);
           for (std::size_t k = 0; k < sims.size(); ++k) record(sims[k], thread_counts[k], mode, round, t[k]);
         }
         if (twin) {
-          DemSimulation sim = warmedUp(1);
+          DemSimulation sim = makeBin(st, states, 1, origin);
+          warmUp(sim);
           record(sim, 1, Mode::Twin, round, runTwins(sim, steps));
         }
       }
