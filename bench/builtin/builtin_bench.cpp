@@ -279,8 +279,8 @@ int main(int argc, char** argv) {
                   "pair loop on %s\n\n",
                   tool.motion.depth_m * 1e3, tool.motion.velocity_m_s * 1e3, steps, vectorIsaName(vectorIsa()));
     if (text)
-      std::printf("%-42s %9s %7s %8s %5s %11s %9s %9s %16s %10s %9s\n", "model", "particles", "threads", "compete",
-                  "round", "dt_s", "wall_s", "cpu_s", "particle_steps/s", "bytes/part", "contacts");
+      std::printf("%-42s %9s %7s %8s %5s %11s %9s %9s %16s %10s %9s %7s\n", "model", "particles", "threads", "compete",
+                  "round", "dt_s", "wall_s", "cpu_s", "particle_steps/s", "bytes/part", "contacts", "alone%");
     for (const auto& label : only)
       if (std::none_of(cases.begin(), cases.end(), [&](const ModelCase& c) { return c.label == label; }))
         throw cli::InputError("--model: unknown model '" + label + "'");
@@ -335,8 +335,9 @@ int main(int argc, char** argv) {
       const auto record = [&](const DemSimulation& sim, int threads, Mode mode, int round, const Timing& t) {
         timings[{threads, mode}].push_back(t);
         if (text)
-          std::printf("%-42s %9zu %7d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu\n", c.label.c_str(), sim.particleCount(), threads,
-                      modeName(mode), round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate, sim.bytesPerParticle(), sim.contactCount());
+          std::printf("%-42s %9zu %7d %8s %5d %11.3e %9.2f %9.2f %16.3e %10zu %9zu %7.1f\n", c.label.c_str(), sim.particleCount(),
+                      threads, modeName(mode), round + 1, sim.timeStep(), t.wall_s, t.cpu_s, t.rate, sim.bytesPerParticle(),
+                      sim.contactCount(), 100.0 * static_cast<double>(sim.teamPhasesAlone()) / std::max(1L, sim.teamPhases()));
         report["cases"].push_back({{"model", c.label},
                                    {"particles", sim.particleCount()},
                                    {"threads", threads},
@@ -349,7 +350,9 @@ int main(int argc, char** argv) {
                                    {"cpu_s", t.cpu_s},
                                    {"particle_steps_per_s", t.rate},
                                    {"bytes_per_particle", sim.bytesPerParticle()},
-                                   {"contacts", sim.contactCount()}});
+                                   {"contacts", sim.contactCount()},
+                                   {"team_phases", sim.teamPhases()},
+                                   {"team_phases_alone", sim.teamPhasesAlone()}});
       };
       for (int round = 0; round < rounds; ++round) {
         for (const Mode mode : modes) {

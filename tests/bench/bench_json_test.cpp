@@ -45,6 +45,15 @@ TEST_CASE("builtin_bench times the thread counts in turns over all their steps a
     CHECK(c.at("simulated_time_s").get<double>() == Approx((5 + kSteps) * c.at("dt_s").get<double>()).epsilon(1e-9));
     const double rate = c.at("particles").get<double>() * kSteps / c.at("wall_s").get<double>();
     CHECK(c.at("particle_steps_per_s").get<double>() == Approx(rate).epsilon(1e-12));
+    // The team's phases: none with 1 thread, at least two a step with 2, some of them perhaps
+    // run by the caller alone.
+    const long phases = c.at("team_phases").get<long>(), alone = c.at("team_phases_alone").get<long>();
+    if (c.at("threads") == 1)
+      CHECK(phases == 0);
+    else
+      CHECK(phases >= 2 * (5 + kSteps));
+    CHECK(alone >= 0);
+    CHECK(alone <= phases);
     ++in_turns;
   }
   CHECK(in_turns == 4);        // 1 and 2 threads, two rounds

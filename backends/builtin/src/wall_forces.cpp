@@ -279,6 +279,8 @@ void DemSimulation::wallLoop(int part) {
   ts.wall_batch.growTo(kWallBatchContacts + kMaxWallCandidates);
   ts.wall_max = 0;
   ts.wall_bad = -1;
+  ts.plane_force.assign(planes_.size(), Vec3{0, 0, 0});
+  ts.mesh_shares.clear();
   // Contacts in the batch (out's last ones) and in out, counted here rather than read back from
   // out after each particle (for the reason in queueWallContact).
   std::size_t count = 0, size = 0;
@@ -405,6 +407,7 @@ void DemSimulation::wallBatchForces(PartState& part, std::size_t count, WallCont
       t_[3 * i + c] += torque[c];
       wc.force[c] = force[c];
     }
+    keepWallReaction(part, wc, force);
   }
 }
 
@@ -417,26 +420,41 @@ void DemSimulation::dropWallContacts() {
 
 // Reactions on the walls: the force on each plane, and on each mesh node its barycentric share of
 // every contact (force of this step, impulse accumulated over dt).
-void DemSimulation::scatterWallForces() {
+// In the part's phase, so that the calling thread does not read every wall contact of every part
+// between the phases (serial work, and memory written on another core). A node's shares are the
+// terms the caller once added contact by contact, in the same order, so the node forces are those
+// of that sum bit for bit; a plane's force is the sum of the parts' sums (with 2 or more threads,
+// another order than contact by contact: it differs at round-off, and no particle feels it).
+void DemSimulation::keepWallReaction(PartState& part, const WallContact& wc, const double* force) const {
   const int P = static_cast<int>(planes_.size());
+  if (wc.wall < P) {
+    for (int c = 0; c < 3; ++c) part.plane_force[static_cast<std::size_t>(wc.wall)][c] -= force[c];
+    return;
+  }
+  for (int q = 0; q < 3; ++q) {
+    if (wc.weights[q] == 0) continue;
+    MeshShare& share = part.mesh_shares.emplace_back();
+    share.mesh = wc.wall - P;
+    share.node = wc.nodes[q];
+    for (int c = 0; c < 3; ++c) share.force[c] = -force[c] * wc.weights[q];
+  }
+}
+
+void DemSimulation::scatterWallForces() {
+  for (std::size_t p = 0; p < planes_.size(); ++p) {
+    plane_force_[p] = part_.front().plane_force[p];
+    for (std::size_t k = 1; k < part_.size(); ++k)
+      for (int c = 0; c < 3; ++c) plane_force_[p][c] += part_[k].plane_force[p][c];
+  }
   for (auto& mf : mesh_force_) std::fill(mf.begin(), mf.end(), 0.0);
-  for (auto& pf : plane_force_) pf = {0, 0, 0};
   for (const auto& part : part_)  // in particle order: the parts' ranges ascend
-    for (const auto& wc : part.wall) {
-      if (wc.wall < P) {
-        for (int c = 0; c < 3; ++c) plane_force_[wc.wall][c] -= wc.force[c];
-        continue;
-      }
-      auto& mf = mesh_force_[wc.wall - P];
-      auto& mi = mesh_impulse_[wc.wall - P];
-      for (int q = 0; q < 3; ++q) {
-        if (wc.weights[q] == 0) continue;
-        DEMFEM_ASSERT(wc.nodes[q] >= 0 && 3 * static_cast<std::size_t>(wc.nodes[q]) < mf.size());
-        for (int c = 0; c < 3; ++c) {
-          const double f = -wc.force[c] * wc.weights[q];
-          mf[3 * wc.nodes[q] + c] += f;
-          mi[3 * wc.nodes[q] + c] += f * dt_;
-        }
+    for (const auto& share : part.mesh_shares) {
+      auto& mf = mesh_force_[static_cast<std::size_t>(share.mesh)];
+      auto& mi = mesh_impulse_[static_cast<std::size_t>(share.mesh)];
+      DEMFEM_ASSERT(share.node >= 0 && 3 * static_cast<std::size_t>(share.node) < mf.size());
+      for (int c = 0; c < 3; ++c) {
+        mf[3 * share.node + c] += share.force[c];
+        mi[3 * share.node + c] += share.force[c] * dt_;
       }
     }
 }

@@ -118,14 +118,15 @@ TEST_CASE("a team whose other threads slow the phases down leaves them to the ca
 namespace {
 
 // Phases run by a TeamModeChoice whose phases take `team` by the whole team and `alone` by the
-// caller alone; returns the phases the team ran.
+// caller alone, a team phase telling `estimate` as what the caller alone would have taken (zero:
+// none); returns the phases the team ran.
 long teamPhases(TeamModeChoice& choice, long phases, std::chrono::nanoseconds team, std::chrono::nanoseconds alone,
-                bool busy = false) {
+                bool busy = false, std::chrono::nanoseconds estimate = std::chrono::nanoseconds{0}) {
   long by_team = 0;
   for (long k = 0; k < phases; ++k) {
     const bool caller_alone = choice.alone();
     by_team += !caller_alone;
-    choice.record(caller_alone ? alone : team, busy);
+    choice.record(caller_alone ? alone : team, busy, caller_alone ? std::chrono::nanoseconds{0} : estimate);
   }
   return by_team;
 }
@@ -155,9 +156,7 @@ TEST_CASE("the team's choice runs the faster way, cuts the losing probe short an
     // Team 6 us, alone 10 us a phase: the team's probe takes 768 us, the caller's loses at its 77th
     // phase (770 us).
     const long alone_probe = 77;
-    long team = 0;
     for (const long stretch : {kRun, 2 * kRun, 4 * kRun, 8 * kRun, 16 * kRun, 16 * kRun}) {
-      team += kProbe + stretch;
       CHECK(teamPhases(choice, kProbe + alone_probe + stretch, microseconds(6), microseconds(10)) == kProbe + stretch);
     }
     CHECK(teamPhases(choice, kProbe, microseconds(6), microseconds(10)) == kProbe);
@@ -173,6 +172,37 @@ TEST_CASE("the team's choice runs the faster way, cuts the losing probe short an
     CHECK(teamPhases(choice, 1, microseconds(6), microseconds(10), true) == 1);
     CHECK(teamPhases(choice, kProbe, microseconds(6), microseconds(10)) == kProbe);
     CHECK(choice.alone());  // the probe after the cut stretch
+  }
+  SECTION("a team that clearly wins on a quiet machine never has the caller alone probed") {
+    TeamModeChoice choice;
+    // Team 6 us a phase, and by the caller's own parts 12 us alone (6 / 12 <= 4/5): the team's
+    // probes count as won, so its stretches still double.
+    for (const long stretch : {kRun, 2 * kRun, 4 * kRun, 8 * kRun, 16 * kRun, 16 * kRun}) {
+      CHECK(teamPhases(choice, kProbe + stretch, microseconds(6), microseconds(10), false, microseconds(12)) ==
+            kProbe + stretch);
+    }
+    CHECK(choice.phasesAlone() == 0);
+  }
+  SECTION("the caller alone is probed when the team's win is not clear, busy or without an estimate") {
+    const long alone_probe = 77;  // as on the quiet machine above: the caller's probe loses at its 77th phase
+    {
+      TeamModeChoice choice;  // 6 us against an estimate of 7 us: above 4/5
+      CHECK(teamPhases(choice, kProbe + alone_probe + kRun, microseconds(6), microseconds(10), false, microseconds(7)) ==
+            kProbe + kRun);
+      CHECK(choice.phasesAlone() == alone_probe);
+    }
+    {
+      TeamModeChoice choice;  // one busy phase in the team's probe
+      CHECK(teamPhases(choice, kProbe - 1, microseconds(6), microseconds(10), false, microseconds(12)) == kProbe - 1);
+      CHECK(teamPhases(choice, 1, microseconds(6), microseconds(10), true, microseconds(12)) == 1);
+      CHECK(choice.alone());
+    }
+    {
+      TeamModeChoice choice;  // one phase whose parts the caller did not run
+      CHECK(teamPhases(choice, 1, microseconds(6), microseconds(10), false, microseconds(0)) == 1);
+      CHECK(teamPhases(choice, kProbe - 1, microseconds(6), microseconds(10), false, microseconds(12)) == kProbe - 1);
+      CHECK(choice.alone());
+    }
   }
   SECTION("a challenger that is faster over its whole probe takes over") {
     TeamModeChoice choice;

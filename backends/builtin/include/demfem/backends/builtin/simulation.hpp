@@ -205,6 +205,10 @@ class DemSimulation {
   double maxOverlap() const;     // largest pair or wall overlap at the last step (m)
   std::size_t contactCount() const;  // touching pair + wall contacts at the last step
   std::size_t bytesPerParticle() const;  // memory of all per-particle and per-contact arrays / N
+  // Phases of its thread team so far (none with 1 thread), and those its calling thread ran alone
+  // (ThreadTeam, "Team or caller alone"). A copy's team starts from none.
+  long teamPhases() const { return team_.phases(); }
+  long teamPhasesAlone() const { return team_.phasesAlone(); }
 
   // Bit-exact state (particles, lists, histories, meshes, time). A restored simulation continues
   // bit-identically. withState() returns this simulation with the saved state; it requires the
@@ -238,6 +242,11 @@ class DemSimulation {
 
   using WallContacts = std::vector<WallContact, DefaultInitAllocator<WallContact>>;
 
+  struct MeshShare {
+    std::int32_t mesh, node;
+    double force[3];  // on the node
+  };
+
   // What one part (partition of the particles) keeps from step to step (memory reused) and reports
   // to the step; whichever thread runs the part uses it.
   struct PartState {
@@ -251,6 +260,11 @@ class DemSimulation {
     std::vector<std::int32_t> rows;      // list build: the neighbours of its rows
     PairBatch batch;                     // pair loop: the touching contacts of a batch of rows
     WallBatch wall_batch;                // wall loop: the contacts of a run of particles
+    // Its wall contacts' reactions at the last force evaluation, kept by the wall loop: their sum
+    // on each plane, and each mesh contact's share of each of its nodes, in contact order
+    // (scatterWallForces adds the parts' in part order).
+    std::vector<Vec3> plane_force;
+    std::vector<MeshShare> mesh_shares;
     double pair_max = 0, wall_max = 0;   // largest overlap of its pair and of its wall contacts
     std::int64_t pair_bad = -1, wall_bad = -1, kick_bad = -1;  // first failing particle, -1 none
     int wall_bad_wall = -1;              // the wall (planes, then meshes) of wall_bad's overlap
@@ -333,6 +347,9 @@ class DemSimulation {
   WallContactList wallContactList() const;
   void setWallContacts(const WallContactList& list);  // into the parts' lists (checkpoint.cpp)
   void dropWallContacts();  // no wall contact history: the particles changed
+  // A contact's reaction on its wall (force: on the particle) into the part's sums.
+  void keepWallReaction(PartState& part, const WallContact& wc, const double* force) const;
+  // The reactions on the planes and mesh nodes: the parts' sums, added in part order (serial).
   void scatterWallForces();
   // Gravity (and settling damping) only: the start of every force evaluation. A copy of what it
   // reads, so that a loop storing forces need not reload it for every particle.

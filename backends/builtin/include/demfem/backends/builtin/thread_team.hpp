@@ -23,9 +23,12 @@
 //   asleep), the second cut short once it is the slower, and runs a stretch of phases the faster
 //   way, then probes again: 4,096 phases after a change of way, twice the last stretch (up to
 //   65,536) while the same way keeps winning, 4,096 again once a thread of the team is preempted
-//   (TeamModeChoice). On a machine whose other cores are taken by other
-//   processes the caller alone is the faster, and the team then runs at one thread's speed
-//   instead of waiting for threads that have no core. The numbers do not change (see above).
+//   (TeamModeChoice). The caller alone is not probed while the team clearly wins without it: no
+//   thread of the team preempted, and the team's phases at most 4/5 of what the caller's own
+//   parts, at the caller's speed, say it would take alone. On a machine whose other cores are
+//   taken by other processes the caller alone is the faster, and the team then runs at one
+//   thread's speed instead of waiting for threads that have no core. The numbers do not change
+//   (see above).
 // - Copying a team makes a new team of the same size (a simulation's copy gets its own threads).
 #pragma once
 
@@ -58,6 +61,12 @@ long involuntaryContextSwitches();
 // incumbent won, so that a choice that keeps winning is probed ever more rarely. A phase recorded
 // as busy (a thread of the team was preempted lately: the machine changed) ends a stretch longer
 // than kRunPhases once kRunPhases of it have run.
+//
+// The caller alone costs a probe's worth of slow phases even when it loses by half, so it is not
+// probed while the team's probe shows that the team clearly wins: each of its phases came with an
+// estimate of the caller alone (the caller's own parts' time scaled to all parts, at the caller's
+// speed, not that of threads that may have lost their core), none was busy, and the phases took at
+// most kClearWin of the estimates in all. The team's probe then counts as won.
 class TeamModeChoice {
  public:
   static constexpr int kProbePhases = 128, kRunPhases = 4096, kMaxRunPhases = 16 * kRunPhases;
@@ -71,13 +80,25 @@ class TeamModeChoice {
     return run_alone_;
   }
 
-  void record(std::chrono::nanoseconds phase, bool busy) {
+  static constexpr double kClearWin = 0.8;
+
+  // `alone_estimate`: for a phase of the whole team, what it would have taken the caller alone
+  // (zero if the caller ran none of its parts, and for a phase of the caller alone).
+  void record(std::chrono::nanoseconds phase, bool busy, std::chrono::nanoseconds alone_estimate) {
+    ++phases_all_;
     phases_alone_ += alone();
     spent_ += phase;
     ++phases_;
     switch (stage_) {
       case Stage::ProbeIncumbent:
+        clear_win_ = clear_win_ && !busy && alone_estimate.count() > 0;
+        estimate_ += alone_estimate;
         if (phases_ < kProbePhases) return;
+        if (!run_alone_ && clear_win_ && static_cast<double>(spent_.count()) <= kClearWin * static_cast<double>(estimate_.count())) {
+          run_phases_ = std::min(2 * run_phases_, kMaxRunPhases);
+          stage_ = Stage::Run;
+          break;
+        }
         incumbent_ = spent_;
         stage_ = Stage::ProbeChallenger;
         break;
@@ -98,9 +119,11 @@ class TeamModeChoice {
         break;
     }
     phases_ = 0;
-    spent_ = std::chrono::nanoseconds{0};
+    spent_ = estimate_ = std::chrono::nanoseconds{0};
+    clear_win_ = true;
   }
 
+  long phases() const { return phases_all_; }
   long phasesAlone() const { return phases_alone_; }
 
  private:
@@ -109,8 +132,10 @@ class TeamModeChoice {
   bool run_alone_ = false;  // the incumbent
   int phases_ = 0;          // of the current stage
   int run_phases_ = kRunPhases / 2;  // of the last stretch (the first is kRunPhases)
-  long phases_alone_ = 0;
+  long phases_all_ = 0, phases_alone_ = 0;
   std::chrono::nanoseconds spent_{0}, incumbent_{0};
+  std::chrono::nanoseconds estimate_{0};  // of the caller alone, over the team's probe so far
+  bool clear_win_ = true;                 // every phase of that probe had one and was not busy
 };
 
 class ThreadTeam {
@@ -137,26 +162,34 @@ class ThreadTeam {
       return;
     }
     const auto began = std::chrono::steady_clock::now();
+    std::chrono::nanoseconds alone_estimate{0};
     if (choice_.alone()) {
       for (int part = 0; part < parts_; ++part) body(part);
     } else {
-      runTeamPhase(body);
+      alone_estimate = runTeamPhase(body);
     }
-    choice_.record(std::chrono::steady_clock::now() - began, machineBusy());
+    choice_.record(std::chrono::steady_clock::now() - began, machineBusy(), alone_estimate);
   }
 
-  // Phases the caller ran alone so far (for tests and benchmarks).
+  // Phases run so far with more than one thread, and those of them the caller ran alone (for
+  // tests and benchmarks).
+  long phases() const { return choice_.phases(); }
   long phasesAlone() const { return choice_.phasesAlone(); }
 
  private:
-  void runTeamPhase(const std::function<void(int)>& body) {
+  // Runs a phase by the whole team; returns what the caller alone would have taken for it at the
+  // speed it ran its own parts (zero if it ran none).
+  std::chrono::nanoseconds runTeamPhase(const std::function<void(int)>& body) {
     body_ = &body;
     done_.store(0, std::memory_order_relaxed);
     const std::uint64_t phase = phase_.load(std::memory_order_relaxed) + 1;
     phase_.store(phase, std::memory_order_release);  // publishes body_ and done_ = 0
     wake();
-    runParts(phase, 0);
+    const auto own_began = std::chrono::steady_clock::now();
+    const int own = runParts(phase, 0);
+    const auto own_time = std::chrono::steady_clock::now() - own_began;
     waitUntil([&] { return done_.load(std::memory_order_acquire) == static_cast<std::uint32_t>(parts_); }, 0);
+    return own > 0 ? own_time * parts_ / own : std::chrono::nanoseconds{0};
   }
 
   static constexpr std::chrono::microseconds kSpinQuiet{200}, kSpinBusy{10};
@@ -181,16 +214,19 @@ class ThreadTeam {
   // ran last phase too, whose particles are still in its core's cache) first. A claim is one
   // compare-and-swap of the part's last phase from phase - 1 to phase, so a thread that wakes late
   // for a phase already finished claims nothing; and the phase a thread holds a part of cannot
-  // finish, nor its body_ be replaced, before that part is done.
-  void runParts(std::uint64_t phase, int thread) {
+  // finish, nor its body_ be replaced, before that part is done. Returns the number of parts run.
+  int runParts(std::uint64_t phase, int thread) {
     const int home = static_cast<int>(static_cast<long>(thread) * parts_ / size_);
+    int ran = 0;
     for (int k = 0; k < parts_; ++k) {
       const int part = (home + k) % parts_;
       std::uint64_t expected = phase - 1;
       if (!claimed_[part].compare_exchange_strong(expected, phase, std::memory_order_acq_rel)) continue;
       (*body_)(part);
+      ++ran;
       if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == static_cast<std::uint32_t>(parts_)) wake();
     }
+    return ran;
   }
 
   // Spin, then sleep until `ready()` (whoever makes it true stores, then calls wake()). `who` is
@@ -221,15 +257,19 @@ class ThreadTeam {
       if (b.load(std::memory_order_relaxed)) return true;
     return false;
   }
+  // The first wait only takes the count to start from: the thread's count since it began (the
+  // caller's may be long) says nothing about the machine now.
   void notePreemptions(int who) {
     Preemptions& p = preemptions_[static_cast<std::size_t>(who)];
-    if (++p.waits % kCheckEvery != 0) return;
+    if (p.waits++ % kCheckEvery != 0) return;
     const long now = involuntaryContextSwitches();
-    if (now - p.switches >= kBusySwitches)
-      p.busy_left = kBusyChecks;
-    else if (p.busy_left > 0)
-      --p.busy_left;
-    busy_[static_cast<std::size_t>(who)].store(p.busy_left > 0, std::memory_order_relaxed);
+    if (p.waits > 1) {
+      if (now - p.switches >= kBusySwitches)
+        p.busy_left = kBusyChecks;
+      else if (p.busy_left > 0)
+        --p.busy_left;
+      busy_[static_cast<std::size_t>(who)].store(p.busy_left > 0, std::memory_order_relaxed);
+    }
     p.switches = now;
   }
 
