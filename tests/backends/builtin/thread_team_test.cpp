@@ -182,6 +182,9 @@ TEST_CASE("the team's choice runs the faster way, cuts the losing probe short an
             kProbe + stretch);
     }
     CHECK(choice.phasesAlone() == 0);
+    // The next team's probe begins here: won by less than 1/5, it is followed by the caller's.
+    CHECK(teamPhases(choice, kProbe, microseconds(6), microseconds(10), false, microseconds(7)) == kProbe);
+    CHECK(choice.alone());
   }
   SECTION("the caller alone is probed when the team's win is not clear, busy or without an estimate") {
     const long alone_probe = 77;  // as on the quiet machine above: the caller's probe loses at its 77th phase
