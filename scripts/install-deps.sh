@@ -3,7 +3,7 @@
 # Nothing is downloaded from elsewhere and nothing is vendored.
 set -euo pipefail
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config ccache
   libeigen3-dev libsuitesparse-dev libspectra-dev
   libzmq3-dev cppzmq-dev nlohmann-json3-dev
   catch2 libcli11-dev libnlopt-cxx-dev libnlopt-dev
