@@ -20,12 +20,30 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A gnuplot double-quoted string.
+// A gnuplot single-quoted string: the only string gnuplot never interprets (no backslash escapes,
+// no backquote command substitution, no macros); a quote inside is doubled. A control character
+// would end the command and start another, so it is refused: text from a recording or a peer is
+// data, never script (docs/reliability.md, "No code from data").
 std::string quoted(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
+  std::string out = "'";
+  for (const char c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      throw PlotError("a plot text contains a control character, refused: '" + text + "'");
+    if (c == '\'') out += '\'';
     out += c;
+  }
+  return out + "'";
+}
+
+// A text field of an inline data block: double-quoted, the only quoting gnuplot's data reader knows,
+// with no escape inside, so a double quote in the text is written as a single one. Data lines are
+// never substituted or executed, but a control character could end the block: refused as above.
+std::string dataField(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      throw PlotError("a plot text contains a control character, refused: '" + text + "'");
+    out += c == '"' ? '\'' : c;
   }
   return out + "\"";
 }
@@ -163,7 +181,7 @@ std::string GnuplotRenderer::script(const Figure& figure, ImageFormat format) co
       const auto& bars = std::get<BarPanel>(figure.panels[p]);
       out << "$p" << p << "bars << EOD\n";
       for (std::size_t c = 0; c < bars.categories.size(); ++c) {
-        out << quoted(bars.categories[c]);
+        out << dataField(bars.categories[c]);
         for (const auto& group : bars.groups) {
           out << ' ';
           writeNumber(out, group.values[c]);

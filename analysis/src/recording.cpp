@@ -9,6 +9,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -20,8 +21,12 @@ using namespace detail;
 namespace fs = std::filesystem;
 
 std::string CaseKey::label() const {
+  // A file name stays far below the system's 255 bytes: a tool name longer than 40 characters keeps
+  // its first 32 and a hash of the whole name, so two long names stay two files.
+  constexpr std::size_t kLongName = 40, kKept = 32;
   std::ostringstream out;
-  out << tool << '_';
+  if (tool.size() <= kLongName) out << tool << '_';
+  else out << tool.substr(0, kKept) << '-' << std::hex << (std::hash<std::string>{}(tool) & 0xffffffffu) << std::dec << '_';
   if (kind == CaseKind::SoilBin) out << depth_mm << "mm";
   else out << mass_kg << "kg";
   std::string result = out.str();
@@ -37,6 +42,12 @@ std::string CaseKey::title() const {
   else out << mass_kg << " kg weight";
   return out.str();
 }
+
+// What a soil-bin run's depth and a calibration weight can be: a value outside is a unit mistake
+// (a depth in metres, a mass in grams) or a corrupted file, never a measurement
+// (docs/analysis.md, "Recordings").
+constexpr double kDepthRange_mm[2] = {1.0, 1000.0};
+constexpr double kMassRange_kg[2] = {1e-3, 100.0};
 
 Recording readRecording(const fs::path& csv_path) {
   Recording rec;
@@ -56,10 +67,10 @@ Recording readRecording(const fs::path& csv_path) {
   const auto keyValue = [](double value) { return std::round(value * 1e6) / 1e6; };
   if (has_depth) {
     rec.key.kind = CaseKind::SoilBin;
-    rec.key.depth_mm = keyValue(sidecar.positive("depth_mm"));
+    rec.key.depth_mm = keyValue(sidecar.within("depth_mm", kDepthRange_mm[0], kDepthRange_mm[1], "a working depth in millimetres"));
   } else {
     rec.key.kind = CaseKind::CalibrationWeight;
-    rec.key.mass_kg = keyValue(sidecar.positive("mass_kg"));
+    rec.key.mass_kg = keyValue(sidecar.within("mass_kg", kMassRange_kg[0], kMassRange_kg[1], "a calibration weight in kilograms"));
   }
   const bool soil_bin = rec.key.kind == CaseKind::SoilBin;
 

@@ -1,5 +1,7 @@
 #include "demfem/analysis/staged_output.hpp"
 
+#include <unistd.h>
+
 #include <fstream>
 #include <stdexcept>
 
@@ -8,7 +10,8 @@ namespace demfem::analysis {
 namespace fs = std::filesystem;
 
 namespace {
-fs::path partialOf(const fs::path& final_path) { return fs::path(final_path).concat(".partial"); }
+// Unique to the writing process, so two writers of one directory never share a staged file.
+fs::path partialOf(const fs::path& final_path) { return fs::path(final_path).concat("." + std::to_string(::getpid()) + ".partial"); }
 }  // namespace
 
 StagedOutput::StagedOutput(fs::path directory) : directory_(std::move(directory)) {}

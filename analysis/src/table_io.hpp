@@ -57,6 +57,14 @@ class Sidecar {
     return value;
   }
 
+  // A number within [lo, hi] (units in the key's name); `hint` says what a value outside suggests.
+  double within(const std::string& key, double lo, double hi, const std::string& hint) const {
+    const double value = number(key);
+    if (!(value >= lo && value <= hi))
+      fail(key, "must be within " + formatNumber(lo) + " to " + formatNumber(hi) + ", found " + formatNumber(value) + " (" + hint + ")");
+    return value;
+  }
+
   double nonzero(const std::string& key) const {
     const double value = number(key);
     if (value == 0.0) fail(key, "must not be 0 (it scales DAQ units to physical units)");
@@ -77,7 +85,11 @@ class Sidecar {
     if (!has(key)) fail(key, "missing (required string)");
     const nlohmann::json& value = doc_.at(key);
     if (!value.is_string() || value.get<std::string>().empty()) fail(key, "expected a non-empty string, found " + value.dump());
-    return value.get<std::string>();
+    const std::string text = value.get<std::string>();
+    // A name is one line of text: it reaches titles, file names and plot scripts (docs/reliability.md).
+    for (const char c : text)
+      if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) fail(key, "contains a control character (a name is one line of printable text): " + value.dump());
+    return text;
   }
 
   bool flag(const std::string& key, bool default_value) const {

@@ -3,6 +3,7 @@
 // into exit codes.
 #pragma once
 
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/analysis/workflow.hpp"
 #include "demfem/cli/cli_support.hpp"
 
@@ -10,6 +11,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <regex>
 #include <string>
 
 namespace demfem::cli {
@@ -57,6 +59,27 @@ inline void finishAnalysisOptions(AnalysisOptions& options) {
                      std::to_string(e.window_end_mm));
   if (!(e.baseline_duration_s >= 0.0)) throw InputError("--baseline-s: must be >= 0");
 }
+
+// One command's exclusive claim on its output directory, held from before its first write to the
+// end (adapter::DirectoryLock: a second command on the same directory fails at once with the
+// holder's process id, instead of mixing its files with the first one's and both reporting
+// success). Holding it, every temporary of an atomic write under the directory (FILE.<pid>.partial
+// of analysis::StagedOutput, FILE.<pid>-<thread>.partial of adapter::writeFileAtomically) is a
+// killed writer's and is removed; a run's resumable FILE.partial is not such a temporary and stays
+// (docs/reliability.md, "One writer per output directory").
+class OutputClaim {
+ public:
+  explicit OutputClaim(const std::filesystem::path& directory) : lock_(directory) {
+    static const std::regex temporary(R"(.*\.[0-9]+(-[0-9]+)?\.partial)");
+    std::vector<std::filesystem::path> stale;
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(directory))
+      if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), temporary)) stale.push_back(entry.path());
+    for (const auto& path : stale) std::filesystem::remove(path);
+  }
+
+ private:
+  adapter::DirectoryLock lock_;
+};
 
 // Writes a command's files through one staged output directory (options.out_dir; nothing appears
 // under its final name unless `write` and the commit succeed): write(out, renderer), the renderer

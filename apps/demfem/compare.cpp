@@ -31,6 +31,7 @@ void addCompareCommand(CLI::App& app) {
   cmd->callback([options, &json_target] {
     runAnalysis([&] {
       finishAnalysisOptions(options->analysis);
+      const OutputClaim claim(options->analysis.out_dir);
       const auto& settings = options->analysis.settings;
       if (!(settings.fft_high_Hz > settings.fft_low_Hz))
         throw InputError("--fft-low-hz/--fft-high-hz: the band is empty (" + std::to_string(settings.fft_low_Hz) + " to " +

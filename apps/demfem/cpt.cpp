@@ -113,6 +113,7 @@ void printSummary(const analysis::CptResults& r, const std::filesystem::path& di
 
 void runConePenetration(const std::vector<std::string>& study_files, const CptOptions& o, const std::string& json_target) {
   if (!(o.depth_step_mm > 0)) throw InputError("--depth-step-mm: must be > 0");
+  const OutputClaim claim(o.output_dir);
   std::signal(SIGINT, onCptStopSignal);
   std::signal(SIGTERM, onCptStopSignal);
   std::vector<analysis::CptSoil> soils;

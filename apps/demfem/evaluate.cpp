@@ -23,6 +23,7 @@ void addEvaluateCommand(CLI::App& app) {
   cmd->callback([options, &json_target] {
     runAnalysis([&] {
       finishAnalysisOptions(options->analysis);
+      const OutputClaim claim(options->analysis.out_dir);
       const auto& settings = options->analysis.settings;
       const std::vector<std::filesystem::path> paths(options->inputs.begin(), options->inputs.end());
       const auto recordings = analysis::readRecordings(paths);

@@ -54,6 +54,7 @@ inline std::string& addFitOutputs(CLI::App& cmd, FitOptions& o) {
 }
 
 struct FitInputs {
+  std::shared_ptr<const OutputClaim> output;  // the output directory, claimed before the first model run
   study::Study study;
   nlohmann::ordered_json study_json;  // the study file as written (the fits edit it by JSON pointer)
   std::vector<analysis::Recording> recordings;
@@ -63,7 +64,8 @@ struct FitInputs {
 // else) and reads the recordings. Throws InputError, study::StudyError or analysis::InputError.
 inline FitInputs readFitInputs(FitOptions& o) {
   finishAnalysisOptions(o.analysis);
-  FitInputs in{loadCheckedStudy(o.study_file), {}, {}};
+  FitInputs in{nullptr, loadCheckedStudy(o.study_file), {}, {}};
+  in.output = std::make_shared<const OutputClaim>(o.analysis.out_dir);
   std::ifstream file(o.study_file);
   in.study_json = nlohmann::ordered_json::parse(file);
   in.recordings = analysis::readRecordings(std::vector<std::filesystem::path>(o.recordings.begin(), o.recordings.end()));

@@ -93,6 +93,7 @@ void addSoilMotionCommand(CLI::App& app) {
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([o, &json_target] {
     runAnalysis([&] {
+      const OutputClaim claim(o->out_dir);
       const auto settings = settingsOf(*o);
       std::vector<analysis::SoilMotionRun> runs;
       for (const auto& dir : o->runs) runs.push_back(analysis::analyseRun(dir, settings));

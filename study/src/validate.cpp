@@ -21,7 +21,6 @@ constexpr double kLengthTolerance_m = 1e-12;
 constexpr double kMaxParticles = 5e6;
 constexpr double kMaxKeypoints = 2e5;
 constexpr double kMaxFemSteps = 1e8;
-constexpr double kMaxDemSteps = 1e11;
 constexpr double kRandomClosePacking = 0.64;  // solid fraction used to estimate the particle count
 
 std::string mm(double metres) { return formatNumber(metres * 1e3) + " mm"; }

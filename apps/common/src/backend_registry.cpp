@@ -2,12 +2,16 @@
 
 #include "demfem/backends/builtin/backend.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/cli/progress.hpp"
 #if DEMFEM_WITH_LIGGGHTS
 #include "demfem/backends/liggghts/backend.hpp"
 #endif
 
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <iostream>
 
 namespace demfem::cli {
@@ -117,9 +121,29 @@ void checkBackends(const study::Study& study) {
   if (!issues.empty()) throw study::StudyError(study.source.string(), issues);
 }
 
+namespace {
+
+// A DEM step from dem.dt_fraction is known only with the critical step (backends/physics), which
+// the study library cannot compute: the same step-count limit as for dem.dt_s, checked here.
+void checkDemStepCount(const study::Study& study) {
+  if (!study::hasSoil(study.kind) || study.dem.dt_s) return;
+  std::int64_t fem_steps = 0;
+  for (const auto& tool : study.tools) fem_steps = std::max(fem_steps, study::planToolMotion(study, tool).totalSteps());
+  const double simulated_s = static_cast<double>(fem_steps) * study.fem.dt_s;
+  const double step_s = physics::demTimeStep(study).step_s;
+  if (!(simulated_s / step_s > study::kMaxDemSteps)) return;
+  char message[256];
+  std::snprintf(message, sizeof message, "gives a DEM step of %.3g s, %.3g DEM steps over the %.3g s the study simulates, more than the limit of %.3g",
+                step_s, simulated_s / step_s, simulated_s, study::kMaxDemSteps);
+  throw study::StudyError(study.source.string(), {{"/dem/dt_fraction", message}});
+}
+
+}  // namespace
+
 study::Study loadCheckedStudy(const std::filesystem::path& file) {
   study::Study study = study::loadStudy(file);
   checkBackends(study);
+  checkDemStepCount(study);
   return study;
 }
 

@@ -51,7 +51,8 @@ struct CaseKey {
   double depth_mm = 0.0;  // SoilBin only
   double mass_kg = 0.0;   // CalibrationWeight only
 
-  // File-name friendly label, e.g. "PMMA_18mm" or "PMMA_1kg".
+  // File-name friendly label, e.g. "PMMA_18mm" or "PMMA_1kg"; at most 60 characters for a tool name
+  // of any length (a long name is cut and keeps a hash of the whole).
   std::string label() const;
   // Human label, e.g. "PMMA, 18 mm depth" or "PMMA, 1 kg weight".
   std::string title() const;

@@ -1,7 +1,7 @@
 // demfem analysis: an output directory whose files appear only when everything succeeded.
 //
 // Contract
-// - stage("plots/a.svg") returns "<dir>/plots/a.svg.partial" (creating sub-directories) and
+// - stage("plots/a.svg") returns "<dir>/plots/a.svg.<pid>.partial" (creating sub-directories) and
 //   remembers the final name. Writers write to the staged path.
 // - commit() renames every staged file to its final name (replacing an older file of that name).
 //   Until then no final name is touched, so an interrupted or failed run never leaves files that

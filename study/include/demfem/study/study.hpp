@@ -240,6 +240,9 @@ enum class ForceAveraging { IntervalMean, Instantaneous };
 // Longest simulated time one simulate call may ask of a DEM server, unless the study raises it:
 // 1000 FEM steps of the paper's 1 ms.
 inline constexpr double kDefaultMaxSimulateS = 1.0;
+// The most DEM steps a study may take over its simulated time, whichever key sets the step
+// (`dem.dt_s` here, `dem.dt_fraction` where the critical step is known: cli::loadCheckedStudy).
+inline constexpr double kMaxDemSteps = 1e11;
 
 struct CouplingSettings {
   std::string endpoint;              // empty: chosen by `demfem run` (ipc://)
