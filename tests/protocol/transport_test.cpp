@@ -4,6 +4,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <sys/stat.h>
+
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -36,7 +38,7 @@ TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]"
   for (const std::string& endpoint : {std::string("inproc://transport-test"), "ipc://" + (dir / "s").string(),
                                      std::string("tcp://127.0.0.1:*")}) {
     demfem::protocol::Context context;
-    ServerSocket server(context, endpoint);
+    ServerSocket server(context, endpoint, {.insecure_tcp = true});
     auto thread = echo(server, 1);
     ClientSocket client(context, server.endpoint(), 5s);
     const Multipart message{R"({"v":1})", std::string("\0\1\2\3", 4), ""};
@@ -83,7 +85,7 @@ TEST_CASE("a request's meanwhile work runs before its reply is awaited, and its 
 
 TEST_CASE("a client whose server never answers times out with a message saying the peer is gone", "[protocol]") {
   demfem::protocol::Context context;
-  ServerSocket silent(context, "tcp://127.0.0.1:*");
+  ServerSocket silent(context, "tcp://127.0.0.1:*", {.insecure_tcp = true});
   ClientSocket client(context, silent.endpoint(), 300ms);
   const auto start = std::chrono::steady_clock::now();
   try {
@@ -100,7 +102,7 @@ TEST_CASE("a client whose server never answers times out with a message saying t
 
 TEST_CASE("a server that goes away while a request is pending fails it at once, not after the timeout", "[protocol]") {
   demfem::protocol::Context context;
-  auto server = std::make_unique<ServerSocket>(context, "tcp://127.0.0.1:*");
+  auto server = std::make_unique<ServerSocket>(context, "tcp://127.0.0.1:*", ServerSocketOptions{.insecure_tcp = true});
   ClientSocket client(context, server->endpoint(), 20s);
   std::thread closer([&] {
     if (server->receive(5s)) server.reset();  // takes the request, never answers, closes
@@ -138,6 +140,54 @@ TEST_CASE("binding ipc never deletes a file that is not a socket", "[protocol]")
   fs::remove_all(dir);
 }
 
+TEST_CASE("an ipc socket file is created with mode 0600, whatever the umask", "[protocol]") {
+  const fs::path dir = demfem::support::freshDir("ipc-mode");
+  const mode_t umask_before = ::umask(0);  // the loosest umask: the socket would be 0777
+  {
+    demfem::protocol::Context context;
+    ServerSocket server(context, "ipc://" + (dir / "dem.ipc").string());
+    CHECK(fs::status(dir / "dem.ipc").permissions() == (fs::perms::owner_read | fs::perms::owner_write));
+  }
+  CHECK(::umask(umask_before) == 0);  // the process's umask is given back
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a message larger than a hello from a connection without the session comes back dropped, the owner's whole",
+          "[protocol]") {
+  demfem::protocol::Context context;
+  ServerSocket server(context, "inproc://sizes");
+  ClientSocket a(context, "inproc://sizes", 5s), b(context, "inproc://sizes", 5s);
+  const std::string big(kMaxUnownedRequestBytes + 1, 'x'), hello(kMaxUnownedRequestBytes, 'h');
+  std::vector<Incoming> seen;
+  std::thread thread([&] {
+    for (int i = 0; i < 5; ++i) {
+      auto in = server.receive(5s);
+      if (!in) return;
+      if (i == 1) server.setOwner(in->from);  // a's second request: a owns the session from here
+      seen.push_back(*in);
+      server.send(in->from, {"ok"});
+    }
+  });
+  a.request({hello});                                    // 0: a hello-sized message is read
+  a.request({big});                                      // 1: too large, a owns nothing yet
+  a.request({"{}", big});                                // 2: a is the owner: read whole
+  b.request({big});                                      // 3: b is not
+  b.request(Multipart(kMaxFrames + 1, std::string()));  // 4: too many frames, b is not the owner
+  thread.join();
+  REQUIRE(seen.size() == 5);
+  CHECK(seen[0].message == Multipart{hello});
+  CHECK_FALSE(seen[0].dropped);
+  CHECK(seen[1].dropped);
+  CHECK(seen[1].message.empty());
+  CHECK(seen[1].bytes == kMaxUnownedRequestBytes + 1);
+  CHECK_FALSE(seen[2].dropped);
+  CHECK(seen[2].message == Multipart{"{}", big});
+  CHECK(seen[3].dropped);
+  CHECK(seen[3].message.empty());
+  CHECK(seen[4].dropped);  // no bytes, but more frames than any request has
+  CHECK(seen[4].message.empty());
+}
+
 TEST_CASE("each reply goes back to the connection its request came on", "[protocol]") {
   demfem::protocol::Context context;
   ServerSocket server(context, "inproc://routing");
@@ -156,13 +206,18 @@ TEST_CASE("each reply goes back to the connection its request came on", "[protoc
   thread.join();
 }
 
-TEST_CASE("binding tcp to a non-loopback address needs CurveZMQ keys", "[protocol]") {
-  CHECK_NOTHROW(checkBindEndpoint("tcp://127.0.0.1:5555", false));
-  CHECK_NOTHROW(checkBindEndpoint("tcp://localhost:*", false));
+TEST_CASE("binding tcp needs CurveZMQ keys, or an explicit insecure flag on a loopback address only", "[protocol]") {
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://127.0.0.1:5555", false), Catch::Contains("any local process"));
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://localhost:*", false), Catch::Contains("--curve-keys"));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://127.0.0.1:5555", false, true));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://localhost:*", false, true));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://127.0.0.1:5555", true));
   CHECK_NOTHROW(checkBindEndpoint("ipc:///run/demfem.sock", false));
   CHECK_THROWS_WITH(checkBindEndpoint("tcp://*:5555", false), Catch::Contains("--curve-keys"));
-  CHECK_THROWS_WITH(checkBindEndpoint("tcp://0.0.0.0:5555", false), Catch::Contains("non-loopback"));
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://0.0.0.0:5555", false, true), Catch::Contains("non-loopback"));
   CHECK_NOTHROW(checkBindEndpoint("tcp://*:5555", true));
+  demfem::protocol::Context context;
+  CHECK_THROWS_WITH(ServerSocket(context, "tcp://127.0.0.1:*"), Catch::Contains("without authentication"));
   CHECK_THROWS_AS(checkBindEndpoint("udp://127.0.0.1:1", false), std::invalid_argument);
 }
 
@@ -172,7 +227,7 @@ TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is re
   writeCurveKeyDirectory(other);
   CHECK((fs::status(keys / "client.secret").permissions() & fs::perms::others_read) == fs::perms::none);
   demfem::protocol::Context context;
-  ServerSocket server(context, "tcp://127.0.0.1:*", loadServerSecurity(keys));
+  ServerSocket server(context, "tcp://127.0.0.1:*", {.security = loadServerSecurity(keys)});
   auto thread = echo(server, 1);
   {
     ClientSocket good(context, server.endpoint(), 5s, loadClientSecurity(keys));
