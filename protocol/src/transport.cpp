@@ -278,7 +278,7 @@ ServerSocket::ServerSocket(Context& shared, const std::string& endpoint, ServerS
   }
   const bool ipc = endpoint.rfind("ipc://", 0) == 0;
   // The socket file of ipc:// is created by bind(2) with the umask's mode: 0600, the user's only.
-  const mode_t umask_before = ipc ? ::umask(077) : 0;
+  const mode_t umask_before = ipc ? ::umask(0177) : 0;
   try {
     sockets_->socket.bind(endpoint);
   } catch (const zmq::error_t& e) {

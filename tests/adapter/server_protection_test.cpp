@@ -29,7 +29,21 @@ using namespace std::chrono_literals;
 namespace p = demfem::protocol;
 namespace fs = std::filesystem;
 
+#if defined(__SANITIZE_ADDRESS__)
+#define DEMFEM_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define DEMFEM_TEST_ASAN 1
+#endif
+#endif
+
 namespace {
+
+#ifdef DEMFEM_TEST_ASAN
+constexpr bool kAddressSanitizer = true;  // its quarantine keeps freed blocks resident (256 MiB)
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
 
 std::unique_ptr<CouplingApi> harmonic() { return makeTestBackend("harmonic", {demfem::study::Tool{}}, TestLoad{}); }
 
@@ -154,7 +168,7 @@ TEST_CASE("a 48 MiB request from a connection without the session is dropped unr
   }
   const std::size_t after = residentBytes();
   // 4 x 48 MiB went through; what stays is bounded by 8 MiB (allocator noise).
-  CHECK(after < before + (8u << 20));
+  if (!kAddressSanitizer) CHECK(after < before + (8u << 20));
   CHECK(owner.time() == Approx(5e-3).margin(1e-12));
   owner.shutdown();
 }
@@ -216,6 +230,13 @@ TEST_CASE("300 idle connections neither stop the owner's requests nor make a tcp
     std::this_thread::sleep_for(1s);
     const double idle_cpu = cpuSeconds(child) - cpu_before;
     CHECK(idle_cpu < 0.1);
+    // A new client is still accepted and answered (Busy: the owner holds the session), not ignored.
+    try {
+      RemoteProxy late({endpoint, 3s, p::loadClientSecurity(keys.path()), "late"}, &context);
+      FAIL("a second client got the session");
+    } catch (const CouplingError& e) {
+      CHECK(e.code() == ErrorCode::Busy);
+    }
     owner.simulate(1e-3);
     owner.shutdown();
     for (const int s : flood) ::close(s);

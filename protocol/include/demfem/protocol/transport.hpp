@@ -15,7 +15,7 @@
 // - Authentication off ipc (docs/protocol.md "Sockets and transports"): a server refuses to bind
 //   tcp:// without CurveZMQ keys (then only the one listed client key gets through the handshake,
 //   checked by a ZAP handler) unless ServerSocketOptions::insecure_tcp is set, and even then only on
-//   a loopback address. ipc:// sockets are created with mode 0600 (umask 077 while binding: the
+//   a loopback address. ipc:// sockets are created with mode 0600 (umask 0177 while binding: the
 //   process's umask is changed for that moment), so only the user's own processes can connect.
 // - CurveZMQ key directory (made by writeCurveKeyDirectory(), keys from zmq_curve_keypair, Z85 text
 //   one key per file): server.pub, server.secret, client.pub, client.secret. The server needs
@@ -103,14 +103,14 @@ inline constexpr std::size_t kMaxConnections = 64;
 inline constexpr std::chrono::milliseconds kHandshakeTimeout{5000};
 
 struct ServerSocketOptions {
-  std::optional<ServerSecurity> security;  // CurveZMQ; required for tcp:// unless insecure_tcp
+  std::optional<ServerSecurity> security{};  // CurveZMQ; required for tcp:// unless insecure_tcp
   // Serve tcp:// on a loopback address without authentication: any local process may then connect,
   // take the session before the real client and send it large messages (docs/protocol.md).
   bool insecure_tcp = false;
   std::size_t max_connections = kMaxConnections;             // tcp:// only, see the contract
   std::chrono::milliseconds handshake_timeout = kHandshakeTimeout;
   // Diagnostics (connections closed at the limit); called from the socket's monitor thread.
-  std::function<void(const std::string&)> log;
+  std::function<void(const std::string&)> log{};
 };
 
 // The connection a request came on: ZeroMQ's routing id, and whether the peer framed it with the
