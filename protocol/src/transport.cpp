@@ -28,7 +28,12 @@ constexpr const char* kZapEndpoint = "inproc://zeromq.zap.01";  // fixed by the 
 constexpr auto kZapPoll = std::chrono::milliseconds(100);
 constexpr auto kMonitorPoll = std::chrono::milliseconds(50);
 
-std::string readKeyFile(const fs::path& file) {
+std::string readKeyFile(const fs::path& file, bool secret) {
+  std::error_code error;
+  const fs::perms mode = fs::status(file, error).permissions();
+  if (secret && !error && (mode & (fs::perms::group_all | fs::perms::others_all)) != fs::perms::none)
+    throw std::runtime_error("CurveZMQ secret key file " + file.string() +
+                             " is accessible to other users (it must be mode 0600: chmod 600 it)");
   std::ifstream in(file);
   if (!in) throw std::runtime_error("CurveZMQ key file " + file.string() + " cannot be read");
   std::string key;
@@ -77,11 +82,13 @@ void writeCurveKeyDirectory(const fs::path& dir) {
 }
 
 ServerSecurity loadServerSecurity(const fs::path& dir) {
-  return {{readKeyFile(dir / "server.pub"), readKeyFile(dir / "server.secret")}, readKeyFile(dir / "client.pub")};
+  return {{readKeyFile(dir / "server.pub", false), readKeyFile(dir / "server.secret", true)},
+          readKeyFile(dir / "client.pub", false)};
 }
 
 ClientSecurity loadClientSecurity(const fs::path& dir) {
-  return {readKeyFile(dir / "server.pub"), {readKeyFile(dir / "client.pub"), readKeyFile(dir / "client.secret")}};
+  return {readKeyFile(dir / "server.pub", false),
+          {readKeyFile(dir / "client.pub", false), readKeyFile(dir / "client.secret", true)}};
 }
 
 void checkBindEndpoint(const std::string& endpoint, bool with_curve, bool insecure_tcp) {

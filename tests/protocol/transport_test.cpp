@@ -252,11 +252,13 @@ TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is re
   fs::remove_all(other);
 }
 
-TEST_CASE("a missing or malformed key file is named in the error", "[protocol]") {
+TEST_CASE("a missing or malformed key file, or a secret one others may read, is named in the error", "[protocol]") {
   const fs::path dir = demfem::support::freshDir("badkeys");
   CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("server.pub"));
   writeCurveKeyDirectory(dir);
   { std::ofstream(dir / "client.pub") << "short\n"; }
   CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("40-character"));
+  fs::permissions(dir / "client.secret", fs::perms::group_read, fs::perm_options::add);
+  CHECK_THROWS_WITH(loadClientSecurity(dir), Catch::Contains("client.secret") && Catch::Contains("other users"));
   fs::remove_all(dir);
 }

@@ -87,7 +87,7 @@ struct ClientSecurity {
 // Creates `dir` (if needed) with fresh server and client key pairs; secret files get mode 0600.
 void writeCurveKeyDirectory(const std::filesystem::path& dir);
 // Read the files a server / a client needs from `dir`; throw std::runtime_error naming a missing or
-// malformed file.
+// malformed file, or a secret file that group or others may access.
 ServerSecurity loadServerSecurity(const std::filesystem::path& dir);
 ClientSecurity loadClientSecurity(const std::filesystem::path& dir);
 
