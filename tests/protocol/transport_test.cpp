@@ -258,7 +258,8 @@ TEST_CASE("a missing or malformed key file, or a secret one others may read, is 
   writeCurveKeyDirectory(dir);
   { std::ofstream(dir / "client.pub") << "short\n"; }
   CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("40-character"));
-  fs::permissions(dir / "client.secret", fs::perms::group_read, fs::perm_options::add);
-  CHECK_THROWS_WITH(loadClientSecurity(dir), Catch::Contains("client.secret") && Catch::Contains("other users"));
+  writeCurveKeyDirectory(dir);
+  fs::permissions(dir / "server.secret", fs::perms::group_read, fs::perm_options::add);
+  CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("server.secret") && Catch::Contains("other users"));
   fs::remove_all(dir);
 }
