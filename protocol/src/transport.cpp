@@ -46,14 +46,15 @@ std::string readKeyFile(const fs::path& file, bool secret) {
 }
 
 void writeKeyFile(const fs::path& file, const std::string& key, bool secret) {
-  {
-    std::ofstream out(file, std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write CurveZMQ key file " + file.string());
-    out << key << '\n';
-  }
+  std::ofstream out(file, std::ios::trunc);
+  if (!out) throw std::runtime_error("cannot write CurveZMQ key file " + file.string());
+  // The mode is set while the file is still empty: a secret key is never readable by others.
   fs::permissions(file, secret ? fs::perms::owner_read | fs::perms::owner_write
                                : fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
                                      fs::perms::others_read);
+  out << key << '\n';
+  out.close();
+  if (!out) throw std::runtime_error("cannot write CurveZMQ key file " + file.string() + " (disk full?)");
 }
 
 CurveKeyPair newKeyPair() {
