@@ -219,8 +219,12 @@ class ServerSocket::ConnectionGuard {
     }
   }
 
-  // True if `fd` is a connection accepted on our port (a closed number may have been reused).
+  // True if `fd` is a connection accepted on our port, not a listening socket (a closed number may
+  // have been reused).
   bool acceptedHere(int fd) const {
+    int listening = 0;
+    socklen_t flag_length = sizeof listening;
+    if (getsockopt(fd, SOL_SOCKET, SO_ACCEPTCONN, &listening, &flag_length) != 0 || listening != 0) return false;
     sockaddr_storage address{};
     socklen_t length = sizeof address;
     if (getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0) return false;
@@ -239,7 +243,7 @@ class ServerSocket::ConnectionGuard {
     if (owner_open) open_.insert(owner);
     if (++sheddings_ == 1 && log_)
       log_(reason + ": closed " + std::to_string(closed) +
-           " connections, every one but the session owner's (logged once; docs/protocol.md \"Sessions\")");
+           " connections, every one but the session owner's (logged once; docs/protocol.md \"Sockets and transports\")");
   }
 
   zmq::socket_t monitor_;
