@@ -12,7 +12,6 @@
 #include <cstring>
 #include <exception>
 #include <fstream>
-#include <mutex>
 #include <regex>
 #include <set>
 #include <stdexcept>
@@ -161,7 +160,6 @@ class ServerSocket::ZapHandler {
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
-
 
 // Watches the connections of a tcp:// server socket (zmq_socket_monitor) from its own thread and
 // closes every connection but the owner's when there are too many or accepting one failed

@@ -4,7 +4,12 @@
 
 #include <catch2/catch.hpp>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -186,6 +191,56 @@ TEST_CASE("a message larger than a hello from a connection without the session c
   CHECK(seen[3].message.empty());
   CHECK(seen[4].dropped);  // no bytes, but more frames than any request has
   CHECK(seen[4].message.empty());
+}
+
+TEST_CASE("past max_connections every tcp connection but the owner's is closed, and that is logged once",
+          "[protocol]") {
+  demfem::protocol::Context context;
+  std::atomic<int> logged{0};
+  ServerSocket server(context, "tcp://127.0.0.1:*",
+                      {.insecure_tcp = true, .max_connections = 4, .log = [&](const std::string&) { ++logged; }});
+  ClientSocket owner(context, server.endpoint(), 5s);
+  std::thread thread([&] {
+    for (int i = 0; i < 2; ++i) {
+      auto in = server.receive(5s);
+      if (!in) return;
+      server.setOwner(in->from);
+      server.send(in->from, in->message);
+    }
+  });
+  REQUIRE(owner.request({"first"}) == Multipart{"first"});
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(std::stoi(server.endpoint().substr(server.endpoint().rfind(':') + 1))));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  for (int flood = 0; flood < 2; ++flood) {
+    std::vector<int> sockets;
+    for (int i = 0; i < 10; ++i) {
+      sockets.push_back(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0));
+      REQUIRE(::connect(sockets.back(), reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0);
+    }
+    // The server closes them: past ZeroMQ's greeting each reads end-of-file (or a reset) within 1 s.
+    int closed = 0;
+    const auto deadline = std::chrono::steady_clock::now() + 1s;
+    for (const int s : sockets) {
+      char bytes[256];
+      for (;;) {
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+        pollfd wait{s, POLLIN, 0};
+        if (left.count() <= 0 || ::poll(&wait, 1, static_cast<int>(left.count())) != 1) break;
+        if (::recv(s, bytes, sizeof bytes, 0) <= 0) {
+          ++closed;
+          break;
+        }
+      }
+      ::close(s);
+    }
+    CHECK(closed >= 10 - 4);  // up to 4 may have come in just after a shedding and be kept
+  }
+  CHECK(server.connectionSheddings() >= 2);
+  CHECK(logged.load() == 1);
+  CHECK(owner.request({"second"}) == Multipart{"second"});  // the owner's connection was never closed
+  thread.join();
 }
 
 TEST_CASE("each reply goes back to the connection its request came on", "[protocol]") {
