@@ -228,8 +228,8 @@ void Server::serve(p::ServerSocket& socket, std::chrono::milliseconds hello_time
                                                    secondsText(window) + " (no session open); backend shut down");
     }
     const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now) + std::chrono::milliseconds(1);
-    if (auto in = socket.receive(wait)) socket.send(in->from, in->dropped ? droppedReply(*in) : handle(in->from, in->message));
     socket.setOwner(session_ ? std::optional(session_->owner) : std::nullopt);
+    if (auto in = socket.receive(wait)) socket.send(in->from, in->dropped ? droppedReply(*in) : handle(in->from, in->message));
   }
 }
 
