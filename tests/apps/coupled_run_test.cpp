@@ -193,6 +193,15 @@ TEST_CASE("killing demfem-dem mid-run stops demfem-fem within its timeout, CSV m
   fs::remove_all(dir);
 }
 
+TEST_CASE("demfem-dem refuses tcp without CurveZMQ keys, naming the ways out", "[apps]") {
+  const fs::path dir = freshDir("tcp-no-keys");
+  Process dem({app("demfem-dem"), "--backend", "harmonic", "--bind", "tcp://127.0.0.1:*", "--connect-timeout-s", "1"},
+              dir / "dem");
+  CHECK_FALSE(exitedOk(dem.wait(10s)));
+  CHECK_THAT(dem.err(), Catch::Contains("--curve-keys") && Catch::Contains("ipc://") && Catch::Contains("--insecure"));
+  fs::remove_all(dir);
+}
+
 TEST_CASE("a client with a wrong CurveZMQ key is refused by demfem-dem", "[apps]") {
   const fs::path dir = freshDir("curve");
   const fs::path study_file = fastQuickStudy(dir);
