@@ -114,7 +114,7 @@ std::vector<int> idleConnections(int port, int count) {
 
 }  // namespace
 
-TEST_CASE("a squatter without the client key cannot take a tcp server's session; the real client then gets it",
+TEST_CASE("a squatter without the client key cannot take a tcp server's session, and the real client then gets it",
           "[adapter]") {
   demfem::support::TempDir keys("squat-keys"), other("squat-other");
   p::writeCurveKeyDirectory(keys.path());
