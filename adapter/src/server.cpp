@@ -35,6 +35,15 @@ std::string newSessionToken() {
   return token;
 }
 
+// The answer to a request dropped unread by the transport (too large for a non-owner).
+p::Multipart droppedReply(const p::Incoming& in) {
+  return p::encode(p::Reply{0, "error", p::ErrorReply{p::WireError::BadRequest,
+                                                     "request of " + std::to_string(in.bytes) + "+ bytes from " +
+                                                         "a connection that does not own the session: dropped "
+                                                         "unread (only a hello, at most " +
+                                                         std::to_string(p::kMaxUnownedRequestBytes) + " bytes, is read)"}});
+}
+
 }  // namespace
 
 Server::Server(CouplingApi& api, ServerOptions options) : api_(api), options_(std::move(options)) {}
@@ -219,7 +228,8 @@ void Server::serve(p::ServerSocket& socket, std::chrono::milliseconds hello_time
                                                    secondsText(window) + " (no session open); backend shut down");
     }
     const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now) + std::chrono::milliseconds(1);
-    if (auto in = socket.receive(wait)) socket.send(in->from, handle(in->from, in->message));
+    socket.setOwner(session_ ? std::optional(session_->owner) : std::nullopt);
+    if (auto in = socket.receive(wait)) socket.send(in->from, in->dropped ? droppedReply(*in) : handle(in->from, in->message));
   }
 }
 

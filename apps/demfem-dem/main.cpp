@@ -22,6 +22,7 @@ struct Options {
   std::string bind;
   std::string curve_keys;
   std::string make_curve_keys;
+  bool insecure = false;
   std::string endpoint_file;
   std::string checkpoint_dir;
   double max_simulate_s = 0;  // 0: the study's coupling.max_simulate_s
@@ -67,21 +68,28 @@ void run(const Options& o) {
   if (endpoint.empty()) endpoint = study && !study->coupling.endpoint.empty() ? study->coupling.endpoint : "tcp://127.0.0.1:5555";
   const double idle_s = o.idle_timeout_s > 0 ? o.idle_timeout_s : 2.0 * (study ? study->coupling.timeout_s : 30.0);
 
-  std::optional<protocol::ServerSecurity> security;
-  if (!o.curve_keys.empty()) security = protocol::loadServerSecurity(o.curve_keys);
+  protocol::ServerSocketOptions socket_options;
+  if (!o.curve_keys.empty()) socket_options.security = protocol::loadServerSecurity(o.curve_keys);
+  socket_options.insecure_tcp = o.insecure;
+  const auto log = [](const std::string& text) { std::cerr << "demfem-dem: " << text << std::endl; };
+  socket_options.log = log;
+  const bool secure = socket_options.security.has_value();
   try {
-    protocol::checkBindEndpoint(endpoint, security.has_value());
+    protocol::checkBindEndpoint(endpoint, secure, o.insecure);
   } catch (const std::invalid_argument& e) {
     throw cli::InputError(std::string("--bind: ") + e.what());
   }
   auto api = makeBackend(o, entry, study);
   protocol::Context context;
-  protocol::ServerSocket socket(context, endpoint, security);
+  protocol::ServerSocket socket(context, endpoint, std::move(socket_options));
   if (!o.endpoint_file.empty()) {
     adapter::writeFileAtomically(o.endpoint_file, socket.endpoint() + "\n");
   }
   std::cerr << "demfem-dem: serving backend '" << backend << "' on " << socket.endpoint()
-            << (security ? " (CurveZMQ)" : "") << std::endl;
+            << (secure                                ? " (CurveZMQ)"
+                : endpoint.rfind("tcp://", 0) == 0 ? " (--insecure: no authentication, any local process may connect)"
+                                                    : "")
+            << std::endl;
   adapter::ServerOptions options;
   options.idle_timeout = millis(idle_s);
   options.max_simulate_s = o.max_simulate_s > 0 ? o.max_simulate_s
@@ -91,7 +99,7 @@ void run(const Options& o) {
     std::filesystem::create_directories(o.checkpoint_dir);
     options.checkpoint_dir = std::filesystem::canonical(o.checkpoint_dir);
   }
-  options.log = [](const std::string& text) { std::cerr << "demfem-dem: " << text << std::endl; };
+  options.log = log;
   adapter::Server server(*api, options);
   server.serve(socket, millis(o.connect_timeout_s));
   std::cerr << "demfem-dem: shut down by the client" << std::endl;
@@ -112,9 +120,12 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--bind", o.bind,
                  "Endpoint to serve: tcp://127.0.0.1:PORT (PORT * = any free port), ipc://PATH; default: the study's "
-                 "coupling.endpoint, else tcp://127.0.0.1:5555. Non-loopback tcp needs --curve-keys");
+                 "coupling.endpoint, else tcp://127.0.0.1:5555. tcp needs --curve-keys (or --insecure on a loopback address)");
   app.add_option("--curve-keys", o.curve_keys, "CurveZMQ key directory (server.pub, server.secret, client.pub)")
       ->check(CLI::ExistingDirectory);
+  app.add_flag("--insecure", o.insecure,
+               "Serve tcp on a loopback address without CurveZMQ keys: any local process can then connect, take "
+               "the session before your client or flood the server (docs/protocol.md)");
   app.add_option("--make-curve-keys", o.make_curve_keys, "Write a fresh server and client key pair to DIR and exit");
   app.add_option("--threads", o.threads, "threads of the built-in DEM; default: the study's dem.threads (the machine's cores)")
       ->check(CLI::PositiveNumber);

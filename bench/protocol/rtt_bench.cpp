@@ -29,7 +29,7 @@ Result measure(const std::string& transport, const std::string& endpoint, int re
   pmma.geometry.thickness_m = 0.004;
   auto backend = adapter::makeTestBackend("constant", {pmma}, adapter::TestLoad{});
   protocol::Context context;
-  protocol::ServerSocket socket(context, endpoint);
+  protocol::ServerSocket socket(context, endpoint, {.insecure_tcp = true});  // loopback, as the transports compare
   adapter::ServerOptions options;
   options.idle_timeout = 10s;
   adapter::Server server(*backend, options);

@@ -4,7 +4,7 @@
 // exerts on node i is F_i = -k (x_i - x0_i) (local frame, N). A real code puts its particle
 // contacts here; the serving part stays the same.
 //
-//   example-dem-server ENDPOINT     serve until the FEM client shuts it down (tcp://127.0.0.1:5555)
+//   example-dem-server ENDPOINT     serve until the FEM client shuts it down (ipc://PATH; tcp needs keys)
 //   example-dem-server --self-check serve in a thread, drive it through the remote proxy and print
 //                                   {"force_z_N": ..., "expected_force_z_N": ...}; exit 0 if equal
 #include "demfem/adapter/coupling_api.hpp"

@@ -3,12 +3,17 @@
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+
 #include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <exception>
 #include <fstream>
 #include <regex>
+#include <set>
 #include <stdexcept>
 #include <thread>
 
@@ -20,8 +25,14 @@ namespace {
 
 constexpr const char* kZapEndpoint = "inproc://zeromq.zap.01";  // fixed by the ZAP RFC 27
 constexpr auto kZapPoll = std::chrono::milliseconds(100);
+constexpr auto kMonitorPoll = std::chrono::milliseconds(50);
 
-std::string readKeyFile(const fs::path& file) {
+std::string readKeyFile(const fs::path& file, bool secret) {
+  std::error_code error;
+  const fs::perms mode = fs::status(file, error).permissions();
+  if (secret && !error && (mode & (fs::perms::group_all | fs::perms::others_all)) != fs::perms::none)
+    throw std::runtime_error("CurveZMQ secret key file " + file.string() +
+                             " is accessible to other users (it must be mode 0600: chmod 600 it)");
   std::ifstream in(file);
   if (!in) throw std::runtime_error("CurveZMQ key file " + file.string() + " cannot be read");
   std::string key;
@@ -34,14 +45,15 @@ std::string readKeyFile(const fs::path& file) {
 }
 
 void writeKeyFile(const fs::path& file, const std::string& key, bool secret) {
-  {
-    std::ofstream out(file, std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write CurveZMQ key file " + file.string());
-    out << key << '\n';
-  }
+  std::ofstream out(file, std::ios::trunc);
+  if (!out) throw std::runtime_error("cannot write CurveZMQ key file " + file.string());
+  // The mode is set while the file is still empty: a secret key is never readable by others.
   fs::permissions(file, secret ? fs::perms::owner_read | fs::perms::owner_write
                                : fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
                                      fs::perms::others_read);
+  out << key << '\n';
+  out.close();
+  if (!out) throw std::runtime_error("cannot write CurveZMQ key file " + file.string() + " (disk full?)");
 }
 
 CurveKeyPair newKeyPair() {
@@ -70,14 +82,16 @@ void writeCurveKeyDirectory(const fs::path& dir) {
 }
 
 ServerSecurity loadServerSecurity(const fs::path& dir) {
-  return {{readKeyFile(dir / "server.pub"), readKeyFile(dir / "server.secret")}, readKeyFile(dir / "client.pub")};
+  return {{readKeyFile(dir / "server.pub", false), readKeyFile(dir / "server.secret", true)},
+          readKeyFile(dir / "client.pub", false)};
 }
 
 ClientSecurity loadClientSecurity(const fs::path& dir) {
-  return {readKeyFile(dir / "server.pub"), {readKeyFile(dir / "client.pub"), readKeyFile(dir / "client.secret")}};
+  return {readKeyFile(dir / "server.pub", false),
+          {readKeyFile(dir / "client.pub", false), readKeyFile(dir / "client.secret", true)}};
 }
 
-void checkBindEndpoint(const std::string& endpoint, bool with_curve) {
+void checkBindEndpoint(const std::string& endpoint, bool with_curve, bool insecure_tcp) {
   if (endpoint.rfind("inproc://", 0) == 0) return;
   if (endpoint.rfind("ipc://", 0) == 0) {
     const fs::path path = endpoint.substr(6);
@@ -95,9 +109,16 @@ void checkBindEndpoint(const std::string& endpoint, bool with_curve) {
                                 "' is not inproc://NAME, ipc://PATH or tcp://HOST:PORT (PORT may be *)");
   const std::string host = m[1];
   const bool loopback = host == "localhost" || host == "[::1]" || host.rfind("127.", 0) == 0;
-  if (!loopback && !with_curve)
+  if (with_curve) return;
+  if (!loopback)
     throw std::invalid_argument("refusing to serve on non-loopback address '" + host +
-                                "' without authentication: pass --curve-keys DIR (CurveZMQ) or bind 127.0.0.1");
+                                "' without authentication: pass --curve-keys DIR (CurveZMQ keys, made by "
+                                "demfem-dem --make-curve-keys DIR)");
+  if (!insecure_tcp)
+    throw std::invalid_argument("refusing to serve '" + endpoint +
+                                "' without authentication: any local process could take the session first or "
+                                "flood it; pass --curve-keys DIR (made by demfem-dem --make-curve-keys DIR), serve "
+                                "ipc://PATH (only your own processes can connect), or accept that with --insecure");
 }
 
 // ZAP handler (RFC 27): accepts a CURVE client only if its public key is the authorized one.
@@ -140,6 +161,100 @@ class ServerSocket::ZapHandler {
   std::thread thread_;
 };
 
+// Watches the connections of a tcp:// server socket (zmq_socket_monitor) from its own thread and
+// closes every connection but the owner's when there are too many or accepting one failed
+// (transport.hpp contract "Connection limits").
+class ServerSocket::ConnectionGuard {
+ public:
+  ConnectionGuard(zmq::context_t& context, zmq::socket_t& socket, const std::string& bound_endpoint,
+                  std::size_t max_connections, std::function<void(const std::string&)> log)
+      : monitor_(context, zmq::socket_type::pair), max_connections_(max_connections), log_(std::move(log)) {
+    port_ = static_cast<std::uint16_t>(std::stoul(bound_endpoint.substr(bound_endpoint.rfind(':') + 1)));
+    static std::atomic<std::uint64_t> monitors{0};
+    const std::string name = "inproc://demfem-server-monitor-" + std::to_string(++monitors);
+    if (zmq_socket_monitor(socket.handle(), name.c_str(),
+                           ZMQ_EVENT_ACCEPTED | ZMQ_EVENT_ACCEPT_FAILED | ZMQ_EVENT_DISCONNECTED) != 0)
+      throw std::runtime_error(std::string("zmq_socket_monitor failed: ") + zmq_strerror(zmq_errno()));
+    monitor_.set(zmq::sockopt::linger, 0);
+    monitor_.connect(name);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~ConnectionGuard() {
+    stop_ = true;
+    thread_.join();
+  }
+  void setOwnerFd(int fd) { owner_fd_ = fd; }
+  std::size_t sheddings() const { return sheddings_; }
+
+ private:
+  void run() {
+    bool accept_failed_since_shed = true;  // failures queued before a shedding are stale
+    while (!stop_) {
+      zmq::pollitem_t item{monitor_.handle(), 0, ZMQ_POLLIN, 0};
+      if (zmq::poll(&item, 1, kMonitorPoll) == 0) continue;
+      std::vector<zmq::message_t> event;
+      if (!zmq::recv_multipart(monitor_, std::back_inserter(event), zmq::recv_flags::dontwait) || event.empty() ||
+          event[0].size() < 6)
+        continue;
+      // Frame 0 of a monitor event: u16 event id, u32 value (here a file descriptor or an errno).
+      std::uint16_t id = 0;
+      std::uint32_t value = 0;
+      std::memcpy(&id, event[0].data(), sizeof id);
+      std::memcpy(&value, static_cast<const char*>(event[0].data()) + 2, sizeof value);
+      const int fd = static_cast<int>(value);
+      if (id == ZMQ_EVENT_ACCEPTED) {
+        accept_failed_since_shed = false;
+        open_.insert(fd);
+        if (open_.size() > max_connections_)
+          shed(std::to_string(open_.size()) + " connections open, more than the limit of " +
+               std::to_string(max_connections_));
+      } else if (id == ZMQ_EVENT_DISCONNECTED) {
+        open_.erase(fd);
+      } else if (id == ZMQ_EVENT_ACCEPT_FAILED && !accept_failed_since_shed) {
+        accept_failed_since_shed = true;
+        shed(std::string("accepting a connection failed (") + std::strerror(fd) + ")");
+      }
+    }
+  }
+
+  // True if `fd` is a connection accepted on our port, not a listening socket (a closed number may
+  // have been reused).
+  bool acceptedHere(int fd) const {
+    int listening = 0;
+    socklen_t flag_length = sizeof listening;
+    if (getsockopt(fd, SOL_SOCKET, SO_ACCEPTCONN, &listening, &flag_length) != 0 || listening != 0) return false;
+    sockaddr_storage address{};
+    socklen_t length = sizeof address;
+    if (getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0) return false;
+    if (address.ss_family == AF_INET) return ntohs(reinterpret_cast<const sockaddr_in&>(address).sin_port) == port_;
+    if (address.ss_family == AF_INET6) return ntohs(reinterpret_cast<const sockaddr_in6&>(address).sin6_port) == port_;
+    return false;
+  }
+
+  void shed(const std::string& reason) {
+    const int owner = owner_fd_;
+    std::size_t closed = 0;
+    for (const int fd : open_)
+      if (fd != owner && acceptedHere(fd) && ::shutdown(fd, SHUT_RDWR) == 0) ++closed;
+    const bool owner_open = open_.count(owner) > 0;
+    open_.clear();
+    if (owner_open) open_.insert(owner);
+    if (++sheddings_ == 1 && log_)
+      log_(reason + ": closed " + std::to_string(closed) +
+           " connections, every one but the session owner's (logged once; docs/protocol.md \"Sockets and transports\")");
+  }
+
+  zmq::socket_t monitor_;
+  std::size_t max_connections_;
+  std::function<void(const std::string&)> log_;
+  std::uint16_t port_ = 0;
+  std::set<int> open_;  // accepted connections, monitor thread only
+  std::atomic<int> owner_fd_{-1};
+  std::atomic<std::size_t> sheddings_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 struct Context::Impl {
   zmq::context_t context{1};
 };
@@ -156,47 +271,97 @@ struct ClientSocket::Sockets {
   zmq::socket_t monitor;  // handshake events: tells a refused key from a silent peer
 };
 
-ServerSocket::ServerSocket(Context& shared, const std::string& endpoint, const std::optional<ServerSecurity>& security)
+ServerSocket::ServerSocket(Context& shared, const std::string& endpoint, ServerSocketOptions options)
     : sockets_(std::make_unique<Sockets>()) {
   zmq::context_t& context = shared.impl_->context;
-  checkBindEndpoint(endpoint, security.has_value());
+  const auto& security = options.security;
+  checkBindEndpoint(endpoint, security.has_value(), options.insecure_tcp);
   if (security) zap_ = std::make_unique<ZapHandler>(context, security->authorized_client_key);
   sockets_->socket = zmq::socket_t(context, zmq::socket_type::router);
   sockets_->socket.set(zmq::sockopt::linger, 0);
   sockets_->socket.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(kMaxFrameBytes));
+  sockets_->socket.set(zmq::sockopt::handshake_ivl, static_cast<int>(options.handshake_timeout.count()));
   if (security) {
     sockets_->socket.set(zmq::sockopt::curve_server, 1);
     sockets_->socket.set(zmq::sockopt::curve_secretkey, security->server.secret_key);
     sockets_->socket.set(zmq::sockopt::zap_domain, "demfem");
   }
+  const bool ipc = endpoint.rfind("ipc://", 0) == 0;
+  // The socket file of ipc:// is created by bind(2) with the umask's mode: 0600, the user's only.
+  const mode_t umask_before = ipc ? ::umask(0177) : 0;
   try {
     sockets_->socket.bind(endpoint);
   } catch (const zmq::error_t& e) {
+    if (ipc) ::umask(umask_before);
     throw std::runtime_error("cannot bind " + endpoint + ": " + e.what());
   }
+  if (ipc) ::umask(umask_before);
   endpoint_ = sockets_->socket.get(zmq::sockopt::last_endpoint);
+  if (endpoint.rfind("tcp://", 0) == 0)
+    guard_ = std::make_unique<ConnectionGuard>(context, sockets_->socket, endpoint_, options.max_connections,
+                                               std::move(options.log));
 }
 
 ServerSocket::~ServerSocket() {
+  if (guard_) {
+    zmq_socket_monitor(sockets_->socket.handle(), nullptr, 0);
+    guard_.reset();
+  }
   sockets_->socket.close();  // before the ZAP handler goes
 }
 
+void ServerSocket::setOwner(const std::optional<PeerAddress>& owner) {
+  const std::optional<std::string> id = owner ? std::optional(owner->routing_id) : std::nullopt;
+  if (id == owner_) return;  // receive() keeps the owner's socket up to date
+  owner_ = id;
+  if (guard_) guard_->setOwnerFd(id && *id == last_routing_id_ ? last_fd_ : -1);
+}
+
+std::size_t ServerSocket::connectionSheddings() const { return guard_ ? guard_->sheddings() : 0; }
+
 std::optional<Incoming> ServerSocket::receive(std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
+  zmq::socket_t& socket = sockets_->socket;
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    zmq::pollitem_t item{sockets_->socket.handle(), 0, ZMQ_POLLIN, 0};
+    zmq::pollitem_t item{socket.handle(), 0, ZMQ_POLLIN, 0};
     if (left.count() <= 0 || zmq::poll(&item, 1, left) == 0) return std::nullopt;
-    std::vector<zmq::message_t> frames;
-    if (!zmq::recv_multipart(sockets_->socket, std::back_inserter(frames)) || frames.size() < 2) continue;
+    zmq::message_t routing_id;
+    if (!socket.recv(routing_id, zmq::recv_flags::dontwait)) continue;
     Incoming in;
-    in.from.routing_id = frames[0].to_string();
-    // A REQ peer puts an empty delimiter between the routing id and frame 0.
-    in.from.delimited = frames[1].size() == 0;
-    const std::size_t first = in.from.delimited ? 2 : 1;
-    in.message.reserve(frames.size() - first);
-    for (std::size_t i = first; i < frames.size(); ++i)
-      in.message.emplace_back(static_cast<const char*>(frames[i].data()), frames[i].size());
+    in.from.routing_id = routing_id.to_string();
+    const bool owned = owner_ && *owner_ == in.from.routing_id;
+    // Frame by frame (ZeroMQ delivers a message whole, so the rest is there): a non-owner's message
+    // stops being kept once it is larger than a hello, and each frame is freed as it is read.
+    bool more = routing_id.more(), first = true;
+    const bool enveloped = more;
+    std::size_t bytes = 0, frames = 0;
+    int fd = -1;
+    while (more) {
+      zmq::message_t frame;
+      if (!socket.recv(frame, zmq::recv_flags::dontwait)) break;
+      more = frame.more();
+      if (fd < 0) fd = zmq_msg_get(frame.handle(), ZMQ_SRCFD);
+      if (first) {
+        first = false;
+        // A REQ peer puts an empty delimiter between the routing id and frame 0.
+        in.from.delimited = frame.size() == 0;
+        if (in.from.delimited) continue;
+      }
+      bytes += frame.size();
+      ++frames;
+      if (!owned && (bytes > kMaxUnownedRequestBytes || frames > kMaxFrames)) {
+        if (!in.dropped) Multipart().swap(in.message);
+        in.dropped = true;
+      } else {
+        in.message.emplace_back(static_cast<const char*>(frame.data()), frame.size());
+      }
+    }
+    if (!enveloped) continue;
+    in.bytes = bytes;
+    last_routing_id_ = in.from.routing_id;
+    last_fd_ = fd;
+    if (owned && guard_) guard_->setOwnerFd(fd);
     return in;
   }
 }

@@ -23,7 +23,7 @@ ServerOptions idle(std::chrono::milliseconds timeout) {
 // A server on its own thread until shutdown or 10 s idle.
 struct ServedBackend {
   explicit ServedBackend(demfem::protocol::Context& context, const std::string& endpoint)
-      : api(harmonic()), socket(context, endpoint), server(*api, idle(10s)) {
+      : api(harmonic()), socket(context, endpoint, {.insecure_tcp = true}), server(*api, idle(10s)) {
     thread = std::thread([this] {
       try {
         server.serve(socket, 10s);
@@ -122,7 +122,7 @@ TEST_CASE("the remote proxy refuses a server of another protocol version", "[ada
 
 TEST_CASE("the remote proxy times out with a clear message when no server answers", "[adapter]") {
   demfem::protocol::Context context;
-  p::ServerSocket silent(context, "tcp://127.0.0.1:*");
+  p::ServerSocket silent(context, "tcp://127.0.0.1:*", {.insecure_tcp = true});
   try {
     RemoteProxy proxy({silent.endpoint(), 300ms, std::nullopt, "test"}, &context);
     FAIL("connected to nobody");
@@ -145,7 +145,7 @@ TEST_CASE("a second client is told the server is busy, the first keeps its sessi
           "[adapter]") {
   demfem::protocol::Context context;
   auto api = harmonic();
-  p::ServerSocket socket(context, "tcp://127.0.0.1:*");
+  p::ServerSocket socket(context, "tcp://127.0.0.1:*", {.insecure_tcp = true});
   Server server(*api, idle(300ms));
   std::thread thread([&] {
     try {

@@ -10,6 +10,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -27,6 +28,8 @@ struct Server {
         process([&] {
           std::vector<std::string> args{app("demfem-dem"), "--bind", "tcp://127.0.0.1:*", "--endpoint-file",
                                         endpoint_file.string(), "--idle-timeout-s", "20", "--connect-timeout-s", "60"};
+          // Loopback tcp without keys must be asked for (docs/protocol.md "Sockets and transports").
+          if (std::find(extra.begin(), extra.end(), "--curve-keys") == extra.end()) args.push_back("--insecure");
           args.insert(args.end(), extra.begin(), extra.end());
           return args;
         }(), dir / name) {
@@ -143,7 +146,7 @@ void checkAgainstFemAlone(const fs::path& dir, const fs::path& study_file, std::
 TEST_CASE("coupled run against the harmonic backend over tcp equals the FEM alone with the same load", "[apps][physics]") {
   const fs::path dir = freshDir("harmonic-tcp");
   const fs::path study_file = fastQuickStudy(dir);
-  std::vector<std::string> server{app("demfem-dem"), "--bind", "tcp://127.0.0.1:*", "--endpoint-file", "ENDPOINT_FILE"};
+  std::vector<std::string> server{app("demfem-dem"), "--insecure", "--bind", "tcp://127.0.0.1:*", "--endpoint-file", "ENDPOINT_FILE"};
   for (const auto& a : harmonicArgs(study_file)) server.push_back(a);
   // 1e-12: the arrays travel bit-exact, so the coupled run must reproduce the FEM alone to rounding.
   checkAgainstFemAlone(dir, study_file, server, 1e-12);
@@ -187,6 +190,15 @@ TEST_CASE("killing demfem-dem mid-run stops demfem-fem within its timeout, CSV m
   const std::string csv = readText(dir / "out" / "sensors.csv");
   CHECK(csv.find("\n# incomplete: ") != std::string::npos);
   CHECK(nlohmann::json::parse(readText(dir / "out" / "sensors.json"))["complete"] == false);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("demfem-dem refuses tcp without CurveZMQ keys, naming the ways out", "[apps]") {
+  const fs::path dir = freshDir("tcp-no-keys");
+  Process dem({app("demfem-dem"), "--backend", "harmonic", "--bind", "tcp://127.0.0.1:*", "--connect-timeout-s", "1"},
+              dir / "dem");
+  CHECK_FALSE(exitedOk(dem.wait(10s)));
+  CHECK_THAT(dem.err(), Catch::Contains("--curve-keys") && Catch::Contains("ipc://") && Catch::Contains("--insecure"));
   fs::remove_all(dir);
 }
 
@@ -275,7 +287,7 @@ TEST_CASE("a coupled run on the builtin DEM killed mid-run and resumed writes th
   const std::vector<std::string> dem_args{"--backend", "builtin", "--study", study_file.string(), "--allow-unsettled-soil"};
   {
     // The first server deposits the soil before it binds.
-    Process deposit({app("demfem-dem"), "--bind", "tcp://127.0.0.1:*", "--endpoint-file", (dir / "deposit.endpoint").string(),
+    Process deposit({app("demfem-dem"), "--insecure", "--bind", "tcp://127.0.0.1:*", "--endpoint-file", (dir / "deposit.endpoint").string(),
                      "--backend", "builtin", "--study", study_file.string(), "--connect-timeout-s", "1",
                      "--allow-unsettled-soil"},
                     dir / "deposit");

@@ -95,7 +95,7 @@ TEST_CASE("a coupled run of demfem-fem against demfem-dem on LIGGGHTS completes 
   ::setenv("DEMFEM_SOIL_DIR", (dir / "soil").c_str(), 1);
 
   const fs::path endpoint_file = dir / "dem.endpoint";
-  Process dem({app("demfem-dem"), "--backend", "liggghts", "--study", study_file.string(), "--bind", "tcp://127.0.0.1:*",
+  Process dem({app("demfem-dem"), "--backend", "liggghts", "--study", study_file.string(), "--insecure", "--bind", "tcp://127.0.0.1:*",
                "--endpoint-file", endpoint_file.string(), "--idle-timeout-s", "60", "--connect-timeout-s", "120"},
               dir / "dem");
   // Deposition happens before demfem-dem binds its socket.
@@ -115,7 +115,7 @@ TEST_CASE("a coupled run of demfem-fem against demfem-dem on LIGGGHTS completes 
       adapter::RemoteProxy proxy(remote);
       relay = std::make_unique<RecordingRelay>(proxy);
       protocol::Context context;
-      protocol::ServerSocket socket(context, "tcp://127.0.0.1:*");
+      protocol::ServerSocket socket(context, "tcp://127.0.0.1:*", {.insecure_tcp = true});
       relay_endpoint.set_value(socket.endpoint());
       adapter::ServerOptions options;
       options.idle_timeout = 60s;

@@ -4,6 +4,13 @@
 
 #include <catch2/catch.hpp>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -36,7 +43,7 @@ TEST_CASE("multipart messages cross inproc, ipc and tcp unchanged", "[protocol]"
   for (const std::string& endpoint : {std::string("inproc://transport-test"), "ipc://" + (dir / "s").string(),
                                      std::string("tcp://127.0.0.1:*")}) {
     demfem::protocol::Context context;
-    ServerSocket server(context, endpoint);
+    ServerSocket server(context, endpoint, {.insecure_tcp = true});
     auto thread = echo(server, 1);
     ClientSocket client(context, server.endpoint(), 5s);
     const Multipart message{R"({"v":1})", std::string("\0\1\2\3", 4), ""};
@@ -83,7 +90,7 @@ TEST_CASE("a request's meanwhile work runs before its reply is awaited, and its 
 
 TEST_CASE("a client whose server never answers times out with a message saying the peer is gone", "[protocol]") {
   demfem::protocol::Context context;
-  ServerSocket silent(context, "tcp://127.0.0.1:*");
+  ServerSocket silent(context, "tcp://127.0.0.1:*", {.insecure_tcp = true});
   ClientSocket client(context, silent.endpoint(), 300ms);
   const auto start = std::chrono::steady_clock::now();
   try {
@@ -100,7 +107,7 @@ TEST_CASE("a client whose server never answers times out with a message saying t
 
 TEST_CASE("a server that goes away while a request is pending fails it at once, not after the timeout", "[protocol]") {
   demfem::protocol::Context context;
-  auto server = std::make_unique<ServerSocket>(context, "tcp://127.0.0.1:*");
+  auto server = std::make_unique<ServerSocket>(context, "tcp://127.0.0.1:*", ServerSocketOptions{.insecure_tcp = true});
   ClientSocket client(context, server->endpoint(), 20s);
   std::thread closer([&] {
     if (server->receive(5s)) server.reset();  // takes the request, never answers, closes
@@ -138,6 +145,107 @@ TEST_CASE("binding ipc never deletes a file that is not a socket", "[protocol]")
   fs::remove_all(dir);
 }
 
+TEST_CASE("an ipc socket file is created with mode 0600, whatever the umask", "[protocol]") {
+  const fs::path dir = demfem::support::freshDir("ipc-mode");
+  const mode_t umask_before = ::umask(0);  // the loosest umask: the socket would be 0777
+  {
+    demfem::protocol::Context context;
+    ServerSocket server(context, "ipc://" + (dir / "dem.ipc").string());
+    CHECK(fs::status(dir / "dem.ipc").permissions() == (fs::perms::owner_read | fs::perms::owner_write));
+  }
+  CHECK(::umask(umask_before) == 0);  // the process's umask is given back
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a message larger than a hello from a connection without the session comes back dropped, the owner's whole",
+          "[protocol]") {
+  demfem::protocol::Context context;
+  ServerSocket server(context, "inproc://sizes");
+  ClientSocket a(context, "inproc://sizes", 5s), b(context, "inproc://sizes", 5s);
+  const std::string big(kMaxUnownedRequestBytes + 1, 'x'), hello(kMaxUnownedRequestBytes, 'h');
+  std::vector<Incoming> seen;
+  std::thread thread([&] {
+    for (int i = 0; i < 5; ++i) {
+      auto in = server.receive(5s);
+      if (!in) return;
+      if (i == 1) server.setOwner(in->from);  // a's second request: a owns the session from here
+      seen.push_back(*in);
+      server.send(in->from, {"ok"});
+    }
+  });
+  a.request({hello});                                    // 0: a hello-sized message is read
+  a.request({big});                                      // 1: too large, a owns nothing yet
+  a.request({"{}", big});                                // 2: a is the owner: read whole
+  b.request({big});                                      // 3: b is not
+  b.request(Multipart(kMaxFrames + 1, std::string()));  // 4: too many frames, b is not the owner
+  thread.join();
+  REQUIRE(seen.size() == 5);
+  CHECK(seen[0].message == Multipart{hello});
+  CHECK_FALSE(seen[0].dropped);
+  CHECK(seen[1].dropped);
+  CHECK(seen[1].message.empty());
+  CHECK(seen[1].bytes == kMaxUnownedRequestBytes + 1);
+  CHECK_FALSE(seen[2].dropped);
+  CHECK(seen[2].message == Multipart{"{}", big});
+  CHECK(seen[3].dropped);
+  CHECK(seen[3].message.empty());
+  CHECK(seen[4].dropped);  // no bytes, but more frames than any request has
+  CHECK(seen[4].message.empty());
+}
+
+TEST_CASE("past max_connections every tcp connection but the owner's is closed, and that is logged once",
+          "[protocol]") {
+  demfem::protocol::Context context;
+  std::atomic<int> logged{0};
+  ServerSocket server(context, "tcp://127.0.0.1:*",
+                      {.insecure_tcp = true, .max_connections = 4, .log = [&](const std::string&) { ++logged; }});
+  ClientSocket owner(context, server.endpoint(), 5s);
+  std::thread thread([&] {
+    for (int i = 0; i < 2; ++i) {
+      auto in = server.receive(5s);
+      if (!in) return;
+      server.setOwner(in->from);
+      server.send(in->from, in->message);
+    }
+  });
+  REQUIRE(owner.request({"first"}) == Multipart{"first"});
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(std::stoi(server.endpoint().substr(server.endpoint().rfind(':') + 1))));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  for (int flood = 0; flood < 2; ++flood) {
+    std::vector<int> sockets;
+    for (int i = 0; i < 10; ++i) {
+      sockets.push_back(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0));
+      REQUIRE(::connect(sockets.back(), reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0);
+    }
+    // The server closes them: past ZeroMQ's greeting each reads end-of-file (or a reset) within 2 s;
+    // up to 4 may have come in just after a shedding and be kept (until their handshake times out).
+    int closed = 0;
+    std::vector<pollfd> open;
+    for (const int s : sockets) open.push_back({s, POLLIN, 0});
+    const auto deadline = std::chrono::steady_clock::now() + 2s;
+    while (closed < 10 - 4) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0 || ::poll(open.data(), open.size(), static_cast<int>(left.count())) <= 0) break;
+      for (pollfd& p : open) {
+        char bytes[256];
+        if (p.fd < 0 || !(p.revents & (POLLIN | POLLHUP | POLLERR))) continue;
+        if (::recv(p.fd, bytes, sizeof bytes, 0) <= 0) {
+          ++closed;
+          p.fd = -1;  // poll ignores it from now on
+        }
+      }
+    }
+    for (const int s : sockets) ::close(s);
+    CHECK(closed >= 10 - 4);
+  }
+  CHECK(server.connectionSheddings() >= 2);
+  CHECK(logged.load() == 1);
+  CHECK(owner.request({"second"}) == Multipart{"second"});  // the owner's connection was never closed
+  thread.join();
+}
+
 TEST_CASE("each reply goes back to the connection its request came on", "[protocol]") {
   demfem::protocol::Context context;
   ServerSocket server(context, "inproc://routing");
@@ -156,13 +264,18 @@ TEST_CASE("each reply goes back to the connection its request came on", "[protoc
   thread.join();
 }
 
-TEST_CASE("binding tcp to a non-loopback address needs CurveZMQ keys", "[protocol]") {
-  CHECK_NOTHROW(checkBindEndpoint("tcp://127.0.0.1:5555", false));
-  CHECK_NOTHROW(checkBindEndpoint("tcp://localhost:*", false));
+TEST_CASE("binding tcp needs CurveZMQ keys, or an explicit insecure flag on a loopback address only", "[protocol]") {
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://127.0.0.1:5555", false), Catch::Contains("any local process"));
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://localhost:*", false), Catch::Contains("--curve-keys"));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://127.0.0.1:5555", false, true));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://localhost:*", false, true));
+  CHECK_NOTHROW(checkBindEndpoint("tcp://127.0.0.1:5555", true));
   CHECK_NOTHROW(checkBindEndpoint("ipc:///run/demfem.sock", false));
   CHECK_THROWS_WITH(checkBindEndpoint("tcp://*:5555", false), Catch::Contains("--curve-keys"));
-  CHECK_THROWS_WITH(checkBindEndpoint("tcp://0.0.0.0:5555", false), Catch::Contains("non-loopback"));
+  CHECK_THROWS_WITH(checkBindEndpoint("tcp://0.0.0.0:5555", false, true), Catch::Contains("non-loopback"));
   CHECK_NOTHROW(checkBindEndpoint("tcp://*:5555", true));
+  demfem::protocol::Context context;
+  CHECK_THROWS_WITH(ServerSocket(context, "tcp://127.0.0.1:*"), Catch::Contains("without authentication"));
   CHECK_THROWS_AS(checkBindEndpoint("udp://127.0.0.1:1", false), std::invalid_argument);
 }
 
@@ -172,7 +285,7 @@ TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is re
   writeCurveKeyDirectory(other);
   CHECK((fs::status(keys / "client.secret").permissions() & fs::perms::others_read) == fs::perms::none);
   demfem::protocol::Context context;
-  ServerSocket server(context, "tcp://127.0.0.1:*", loadServerSecurity(keys));
+  ServerSocket server(context, "tcp://127.0.0.1:*", {.security = loadServerSecurity(keys)});
   auto thread = echo(server, 1);
   {
     ClientSocket good(context, server.endpoint(), 5s, loadClientSecurity(keys));
@@ -197,11 +310,14 @@ TEST_CASE("CurveZMQ: the keyed client is served, a client with another key is re
   fs::remove_all(other);
 }
 
-TEST_CASE("a missing or malformed key file is named in the error", "[protocol]") {
+TEST_CASE("a missing or malformed key file, or a secret one others may read, is named in the error", "[protocol]") {
   const fs::path dir = demfem::support::freshDir("badkeys");
   CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("server.pub"));
   writeCurveKeyDirectory(dir);
   { std::ofstream(dir / "client.pub") << "short\n"; }
   CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("40-character"));
+  writeCurveKeyDirectory(dir);
+  fs::permissions(dir / "server.secret", fs::perms::group_read, fs::perm_options::add);
+  CHECK_THROWS_WITH(loadServerSecurity(dir), Catch::Contains("server.secret") && Catch::Contains("other users"));
   fs::remove_all(dir);
 }

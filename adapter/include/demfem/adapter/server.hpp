@@ -21,6 +21,9 @@
 //   ServerOptions::checkpoint_dir; without a directory both are refused (Unsupported). A failed
 //   restore answers the same message whatever the cause (missing, unreadable or invalid file), so
 //   a peer cannot probe which files exist; the cause goes to ServerOptions::log.
+// - serve() tells the socket which connection owns the session (ServerSocket::setOwner), so that a
+//   request larger than a hello from any other connection is dropped unread (answered BadRequest,
+//   docs/protocol.md "Sessions") and the owner's connection survives the connection limits.
 // - serve() answers requests until shutdown and returns; it throws CouplingError(PeerGone), after
 //   shutting the backend down, when no session is open and no hello arrives within `hello_timeout`
 //   of the start, or within the idle timeout of the end of the last session (its client may
