@@ -139,9 +139,10 @@ Eigen::VectorXd weightLoad(const fem::ReducedModel& model, const std::vector<int
   return load;
 }
 
-// The reduced model with the weight's mass lumped on the pan rows (Section 2.10.1).
+// The reduced model with the weight's mass, and the added mass already hanging there (its weight
+// tared), lumped on the pan rows (Section 2.10.1, as fem::simulateWeightDrop).
 fem::ReducedModel loadedModel(fem::ReducedModel model, const std::vector<int>& pan, const study::WeightDrop& drop) {
-  fem::addLumpedMass(model, pan, drop.mass_kg / static_cast<double>(pan.size()));
+  fem::addLumpedMass(model, pan, (drop.mass_kg + drop.added_mass_kg) / static_cast<double>(pan.size()));
   return model;
 }
 
@@ -247,7 +248,8 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
   const auto reduction = impl_->reductions.get(tool_key, [&] {
     return Reduction{fem::reduceCached(fem::buildFullModel(tool), fem::defaultReductionDirectory()), tool.fem.youngs_Pa, clamp.value_or(0.0)};
   });
-  const std::string weight_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
+  const std::string weight_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump() +
+                                 "|" + nlohmann::json(drop.added_mass_kg).dump();
   std::shared_ptr<const Basis> basis;
   if (clamp) {
     const auto ritz = impl_->ritz.get(weight_key, [&] {
