@@ -39,7 +39,7 @@ void run(DiagnoseOptions& o, const std::string& json_target) {
       throw campaign::ArgumentError("--model-form-percent " + f + ": not [QUANTITY=]PERCENT with PERCENT >= 0");
     }
   }
-  if (!o.settings.model_form_percent.count("")) o.settings.model_form_percent[""] = 0.5;
+  if (!o.settings.model_form_percent.count("")) o.settings.model_form_percent[""] = 0.3;
   const FitInputs in = readFitInputs(o.fit);
   configureFit(o.settings.calibration, o.fit, in.study, o.x_tolerance_given);
   const auto start = std::chrono::steady_clock::now();
@@ -83,14 +83,14 @@ void addDiagnoseCommand(CLI::App& app) {
   cmd->add_option("--baseline-fit", o->baseline_fit,
                   "Calibrated baseline parameter PATH=LO:HI[:log] (repeatable; default: the domain's preset, docs/diagnosis.md)");
   cmd->add_option("--model-form-percent", o->model_form,
-                  "Model-form tolerance [QUANTITY=]PERCENT (repeatable; default 1.5 for step_force_N, 0.5 for the others)");
+                  "Model-form tolerance [QUANTITY=]PERCENT (repeatable, in order: a bare PERCENT sets every quantity; default 1.5 for step_force_N, 0.3 for the others)");
   cmd->add_option("--significance-level", s.significance_level, "Family-wise level of the residual test (Holm)")
       ->check(CLI::Range(1e-12, 0.5))
       ->capture_default_str();
   cmd->add_option("--min-ln-bayes-factor", s.min_ln_bayes_factor, "ln Bayes factor over the calibrated baseline a named model must reach")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--min-gain-percent", s.min_gain_percent, "Held-out error cut a named model must reach (where a split identifies it)")
+  cmd->add_option("--min-gain-percent", s.min_gain_percent, "Held-out chi2 cut a named model must reach, % (where a split identifies it)")
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
   cmd->add_option("--min-held-out-folds", s.min_held_out_folds, "Held-out cases a named model must predict (where a split identifies it)")

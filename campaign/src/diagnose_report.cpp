@@ -49,6 +49,9 @@ const Section<const ModelFit*>& modelSection() {
        {"error_after_percent", [](R m) -> CellValue { return m->error_after_percent; }},
        {"noise_error_percent", [](R m) -> CellValue { return m->noise_error_percent; }},
        {"gain_percent", [](R m) -> CellValue { return m->gain_percent; }},
+       {"held_out_chi2_before", [](R m) -> CellValue { return m->held_out_chi2_before; }},
+       {"held_out_chi2_after", [](R m) -> CellValue { return m->held_out_chi2_after; }},
+       {"chi2_gain_percent", [](R m) -> CellValue { return m->chi2_gain_percent; }},
        {"model_runs", [](R m) -> CellValue { return static_cast<long long>(m->model_runs); }},
        {"wall_time_s", [](R m) -> CellValue { return m->wall_time_s; }},
        {"fitted_values", [](R m) -> CellValue { return fittedValues(*m); }, Output::MarkdownOnly}},
@@ -58,6 +61,7 @@ const Section<const ModelFit*>& modelSection() {
        {"significant residuals", md::text("significant_residuals")},
        {"held-out error before -> after (%)", md::concat({md::number("error_before_percent", 3), md::literal(" -> "), md::number("error_after_percent", 3)})},
        {"gain (%)", md::number("gain_percent", 3)},
+       {"held-out chi2 before -> after", md::concat({md::number("held_out_chi2_before", 3), md::literal(" -> "), md::number("held_out_chi2_after", 3)})},
        {"fitted values (+- one sigma)", md::text("fitted_values")},
        {"split", md::text("split")}},
       "model"};
@@ -260,7 +264,7 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
         "scatter and a model-form tolerance (" + modelFormText(settings) + "); Holm's step-down at a "
         "family-wise level of " + shortNum(settings.significance_level) + ". A model is named when ln B >= " +
         shortNum(settings.min_ln_bayes_factor) + " over the calibrated baseline, no residual is left significant and, where a split "
-        "identifies it, it cuts the held-out error by at least " + shortNum(settings.min_gain_percent) + " % (docs/diagnosis.md).\n\n";
+        "identifies it, it cuts the held-out chi2 by at least " + shortNum(settings.min_gain_percent) + " % (docs/diagnosis.md).\n\n";
   md += "The study as given: error " + shortNum(d.nominal_error_percent) + " % (RMS of 100 (sim - meas) / meas over every quantity of every case).\n\n";
   if (!d.failed_baseline_cases.empty())
     md += "Left out of every error and test: the cases whose nominal run failed (DEM blow-up): " + caseLabels(d.failed_baseline_cases).dump() + ".\n\n";

@@ -60,11 +60,17 @@ campaign::Diagnosis diagnoseBeam(const BeamTool& beam, const std::string& name, 
   for (const auto& c : d.causes) std::printf(" %s", c.c_str());
   std::printf(" (gain %.3g %%, %.2f s): %s\n", d.gain_percent, d.wall_time_s, d.reason.c_str());
   if (std::getenv("DEMFEM_DIAGNOSE_VERBOSE"))  // TEMP
-    for (const auto& l : d.localisation) std::printf("  %s %s %.3f %% z %.2f\n", l.key.title().c_str(), l.quantity.c_str(), l.residual_percent, l.z);
+    for (const auto& m : d.models) {
+      std::printf("  %s lnB %.1f p %.2f sig %d %.2f->%.2f %.2f s runs %d:", m.id().c_str(), m.ln_bayes_factor, m.probability, m.significant, m.error_before_percent, m.error_after_percent, m.wall_time_s, m.model_runs);
+      for (const auto& p : m.parameters) std::printf(" %s=%.4g", p.spec.label().c_str(), p.best);
+      std::printf("\n");
+    }
   return d;
 }
 
-void requireNamed(const campaign::Diagnosis& d, std::vector<std::string> causes, double min_gain_percent) {
+// The named model must be `causes` (in any order); held out (when `held_out`), its held-out chi2 cut
+// by at least min_chi2_gain_percent.
+void requireNamed(const campaign::Diagnosis& d, std::vector<std::string> causes, bool held_out, double min_chi2_gain_percent) {
   INFO("reason: " << d.reason);
   for (const auto& m : d.models)
     INFO(m.id() << ": ln B " << m.ln_bayes_factor << ", p " << m.probability << ", significant " << m.significant << ", "
@@ -74,7 +80,10 @@ void requireNamed(const campaign::Diagnosis& d, std::vector<std::string> causes,
   std::sort(named.begin(), named.end());
   std::sort(causes.begin(), causes.end());
   CHECK(named == causes);
-  CHECK(d.gain_percent >= min_gain_percent);
+  const auto model = std::find_if(d.models.begin(), d.models.end(), [&](const campaign::ModelFit& m) { return m.causes == d.causes; });
+  REQUIRE(model != d.models.end());
+  CHECK(model->heldOut() == held_out);
+  if (held_out) CHECK(model->chi2_gain_percent >= min_chi2_gain_percent);
   CHECK(d.unjudged.empty());  // every weight cause is judged on every weight quantity
 }
 
@@ -84,35 +93,35 @@ TEST_CASE("weight drops of a beam with a compliant clamp are diagnosed as clamp_
   BeamTool beam;
   beam.k_theta_Nm_per_rad = 1.5;  // about the narrow tool's own EI / L (1.35 N m/rad)
   const auto d = diagnoseBeam(beam, "clamp");
-  requireNamed(d, {"clamp_compliance"}, 50.0);
+  requireNamed(d, {"clamp_compliance"}, true, 90.0);
 }
 
 TEST_CASE("weight drops of a beam with a 20 % lower Young's modulus are diagnosed as young_modulus", "[campaign][diagnose]") {
   BeamTool beam;
   beam.E_Pa *= 0.8;
   const auto d = diagnoseBeam(beam, "modulus");
-  requireNamed(d, {"young_modulus"}, 50.0);
+  requireNamed(d, {"young_modulus"}, true, 90.0);
 }
 
 TEST_CASE("weight drops of a beam with mass-proportional damping are diagnosed as mass_damping", "[campaign][diagnose]") {
   BeamTool beam;
   beam.beta_per_s = 1.5;  // damping ratio +0.03 at the heavy weight's 3.6 Hz
   const auto d = diagnoseBeam(beam, "damping");
-  requireNamed(d, {"mass_damping"}, 0.0);
+  requireNamed(d, {"mass_damping"}, false, 0.0);  // two damping terms: one weight cannot identify them
 }
 
 TEST_CASE("weight drops read through a load cell 15 % low are diagnosed as force_sensor_gain", "[campaign][diagnose]") {
   BeamTool beam;
   beam.force_gain = 0.85;
   const auto d = diagnoseBeam(beam, "gain");
-  requireNamed(d, {"force_sensor_gain"}, 50.0);
+  requireNamed(d, {"force_sensor_gain"}, true, 90.0);
 }
 
-TEST_CASE("weight drops read through a deformation sensor 4 % high are diagnosed as deformation_sensor_gain", "[campaign][diagnose]") {
+TEST_CASE("weight drops read through a deformation sensor 5 % high are diagnosed as deformation_sensor_gain", "[campaign][diagnose]") {
   BeamTool beam;
-  beam.deformation_gain = 1.04;  // one channel, a few percent: diluted below 5 % by the old RMS rule
+  beam.deformation_gain = 1.05;  // one channel, a few percent: diluted below 5 % by the old RMS rule
   const auto d = diagnoseBeam(beam, "deformation-gain");
-  requireNamed(d, {"deformation_sensor_gain"}, 50.0);
+  requireNamed(d, {"deformation_sensor_gain"}, true, 50.0);
 }
 
 TEST_CASE("weight drops of a beam whose damping has another form are diagnosed as damping_form", "[campaign][diagnose]") {
@@ -123,25 +132,25 @@ TEST_CASE("weight drops of a beam whose damping has another form are diagnosed a
   beam.beta_per_s = 0.9 * beam.alpha_s * heavy_omega * heavy_omega;
   beam.alpha_s *= 0.1;
   const auto d = diagnoseBeam(beam, "damping-form");
-  requireNamed(d, {"damping_form"}, 0.0);
+  requireNamed(d, {"damping_form"}, false, 0.0);
 }
 
-TEST_CASE("weight drops of a beam 15 % softer read through a load cell 5 % low name both causes", "[campaign][diagnose]") {
+TEST_CASE("weight drops of a beam 15 % softer read through a load cell 10 % low name both causes", "[campaign][diagnose]") {
   BeamTool beam;
   beam.E_Pa *= 0.85;
-  beam.force_gain = 0.95;
+  beam.force_gain = 0.9;
   const auto d = diagnoseBeam(beam, "pair");
-  requireNamed(d, {"young_modulus", "force_sensor_gain"}, 50.0);
+  requireNamed(d, {"young_modulus", "force_sensor_gain"}, true, 90.0);
 }
 
 TEST_CASE("weight drops through a nonlinear deformation sensor are an unexplained discrepancy, no cause named", "[campaign][diagnose]") {
-  // Outside the catalogue: the deformation reading grows with the square of the deflection (3 % at
+  // Outside the catalogue: the deformation reading grows with the square of the deflection (8 % at
   // 1 mm), which no linear model reproduces at two weights at once.
   const ChannelEffect nonlinear = [](analysis::SyntheticRecording& rec) {
     const campaign::test::Daq daq;
     for (double& units : rec.columns[2]) {
       const double mm = units * daq.deformation_factor_mm_per_unit;
-      units = std::round(mm * (1 + 0.03 * mm) / daq.deformation_factor_mm_per_unit);
+      units = std::round(mm * (1 + 0.08 * mm) / daq.deformation_factor_mm_per_unit);
     }
   };
   const auto d = diagnoseBeam(BeamTool{}, "nonlinear", nonlinear);
