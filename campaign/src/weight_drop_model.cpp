@@ -31,6 +31,7 @@
 #include <cmath>
 #include <future>
 #include <map>
+#include <optional>
 #include <mutex>
 
 namespace demfem::campaign {
@@ -197,20 +198,17 @@ study::WeightDrop withoutAddedMass(study::WeightDrop drop) {
   return drop;
 }
 
-// Rigid clamp: the loaded reduction at E_ref (E enters by scaling, integrate()).
-WeightSolution rigidSolution(const Reduction& reduction, const study::WeightDrop& drop) {
-  const std::vector<int> pan = panDofs(reduction.model, drop);
-  const fem::ReducedModel loaded = loadedModel(reduction.model, pan, withoutAddedMass(drop));
-  return {fem::naturalModes(loaded, modeCount(loaded)), fem::solveStatic(loaded, weightLoad(loaded, pan, drop))};
+// Rigid clamp: `loaded` is the loaded reduction at E_ref (E enters by scaling, integrate()).
+WeightSolution rigidSolution(const fem::ReducedModel& loaded, const study::WeightDrop& drop) {
+  return {fem::naturalModes(loaded, modeCount(loaded)), fem::solveStatic(loaded, weightLoad(loaded, panDofs(loaded, drop), drop))};
 }
 
-// Compliant clamp: at the tool's E and k_theta from the weight's spring Ritz basis.
-WeightSolution sprungSolution(const Reduction& reduction, const fem::SpringRitzBasis& ritz, const study::Tool& tool, const study::WeightDrop& drop) {
-  const std::vector<int> pan = panDofs(reduction.model, drop);
-  const fem::ReducedModel loaded = loadedModel(modelOf(reduction, tool), pan, withoutAddedMass(drop));
+// Compliant clamp: `loaded` at the tool's E and k_theta (modelOf), from the weight's spring Ritz basis.
+WeightSolution sprungSolution(const Reduction& reduction, const fem::ReducedModel& loaded, const fem::SpringRitzBasis& ritz,
+                              const study::Tool& tool, const study::WeightDrop& drop) {
   const double e = tool.fem.youngs_Pa / reduction.E_ref_Pa;
   const double s = *tool.constraints.clamp_rotational_stiffness_Nm_per_rad / reduction.k_ref_Nm_per_rad;
-  return {ritz.modes(e, s, modeCount(loaded)), ritz.solveStatic(e, s, weightLoad(loaded, pan, drop))};
+  return {ritz.modes(e, s, modeCount(loaded)), ritz.solveStatic(e, s, weightLoad(loaded, panDofs(loaded, drop), drop))};
 }
 
 // The modes with the added mass m_a on the pan rows from those without it, by Rayleigh-Ritz on the
@@ -230,10 +228,11 @@ fem::Modes withAddedMass(const fem::Modes& modes, const std::vector<int>& pan, d
   return out;
 }
 
-// The basis of one weight with its added mass (Section 2.10.1; the model with the added mass on M).
-Basis weightBasis(const fem::ReducedModel& model, const WeightSolution& solution, const study::Tool& tool, const study::WeightDrop& drop) {
-  const std::vector<int> pan = panDofs(model, drop);
-  const fem::ReducedModel loaded = loadedModel(model, pan, drop);
+// The basis of one weight with its added mass. `loaded` is the model without the added mass: the
+// added mass lies on free pan DOFs, so neither the sensors nor the load-cell rows of M see it; it
+// enters through the modes only.
+Basis weightBasis(const fem::ReducedModel& loaded, const WeightSolution& solution, const study::Tool& tool, const study::WeightDrop& drop) {
+  const std::vector<int> pan = panDofs(loaded, drop);
   return basisOf(loaded, tool, withAddedMass(solution.modes, pan, drop.added_mass_kg), solution.exact, weightLoad(loaded, pan, drop));
 }
 
@@ -289,19 +288,26 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
   const std::string weight_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
   std::shared_ptr<const WeightSolution> solution;
   std::string solution_key = weight_key;
+  // The loaded model without the added mass (at the tool's E and k_theta with a clamp spring), built
+  // once per run when a solution or basis is missing.
+  std::optional<fem::ReducedModel> loaded_model;
+  const auto loaded = [&]() -> const fem::ReducedModel& {
+    if (!loaded_model)
+      loaded_model = loadedModel(clamp ? modelOf(*reduction, tool) : reduction->model, panDofs(reduction->model, drop), withoutAddedMass(drop));
+    return *loaded_model;
+  };
   if (clamp) {
     const auto ritz = impl_->ritz.get(weight_key, [&] {
       const fem::ReducedModel loaded = loadedModel(reduction->model, panDofs(reduction->model, drop), withoutAddedMass(drop));
       return fem::SpringRitzBasis(loaded, modeCount(loaded));
     });
     solution_key += "|" + nlohmann::json(tool.fem.youngs_Pa).dump() + "|" + nlohmann::json(*clamp).dump();
-    solution = impl_->solutions.get(solution_key, [&] { return sprungSolution(*reduction, *ritz, tool, drop); });
+    solution = impl_->solutions.get(solution_key, [&] { return sprungSolution(*reduction, loaded(), *ritz, tool, drop); });
   } else {
-    solution = impl_->solutions.get(solution_key, [&] { return rigidSolution(*reduction, drop); });
+    solution = impl_->solutions.get(solution_key, [&] { return rigidSolution(loaded(), drop); });
   }
-  const auto basis = impl_->bases.get(solution_key + "|" + nlohmann::json(drop.added_mass_kg).dump(), [&] {
-    return weightBasis(clamp ? modelOf(*reduction, tool) : reduction->model, *solution, tool, drop);
-  });
+  const auto basis = impl_->bases.get(solution_key + "|" + nlohmann::json(drop.added_mass_kg).dump(),
+                                      [&] { return weightBasis(loaded(), *solution, tool, drop); });
   const auto steps = static_cast<long>(std::llround(drop.duration_s / study.fem.dt_s));
   const double scale = clamp ? 1.0 : tool.fem.youngs_Pa / reduction->E_ref_Pa;  // a sprung basis is at the tool's E
   analysis::Recording rec = integrate(*basis, scale, tool, study.fem.dt_s, steps);

@@ -59,12 +59,6 @@ campaign::Diagnosis diagnoseBeam(const BeamTool& beam, const std::string& name, 
   std::printf("diagnose %s: %s", name.c_str(), campaign::verdictText(d.verdict).c_str());
   for (const auto& c : d.causes) std::printf(" %s", c.c_str());
   std::printf(" (gain %.3g %%, %.2f s): %s\n", d.gain_percent, d.wall_time_s, d.reason.c_str());
-  if (std::getenv("DEMFEM_DIAGNOSE_VERBOSE"))  // TEMP
-    for (const auto& m : d.models) {
-      std::printf("  %s lnB %.1f p %.2f sig %d %.2f->%.2f %.2f s runs %d:", m.id().c_str(), m.ln_bayes_factor, m.probability, m.significant, m.error_before_percent, m.error_after_percent, m.wall_time_s, m.model_runs);
-      for (const auto& p : m.parameters) std::printf(" %s=%.4g", p.spec.label().c_str(), p.best);
-      std::printf("\n");
-    }
   return d;
 }
 
