@@ -267,7 +267,9 @@ class Search {
 };
 
 // One-sigma widths in optimiser coordinates from the Gauss-Newton curvature at x (contract).
-std::vector<double> unitSigmas(Evaluator& evaluator, const std::vector<double>& x, double step) {
+// Per parameter the standard deviation in optimiser coordinates (infinite along a flat direction),
+// and the eigenvalues of J^T J in `eigenvalues`.
+std::vector<double> unitSigmas(Evaluator& evaluator, const std::vector<double>& x, double step, std::vector<double>& eigenvalues) {
   const auto& specs = evaluator.specs();
   const auto m = static_cast<Eigen::Index>(evaluator.at(valuesOf(specs, x)).residuals.size());
   const auto n = static_cast<Eigen::Index>(x.size());
@@ -281,6 +283,7 @@ std::vector<double> unitSigmas(Evaluator& evaluator, const std::vector<double>& 
     for (Eigen::Index k = 0; k < m; ++k) J(k, i) = (r_hi[k].normalized - r_lo[k].normalized) / (hi[i] - lo[i]);
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(J.transpose() * J);
+  eigenvalues.assign(eig.eigenvalues().data(), eig.eigenvalues().data() + n);
   const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
   std::vector<double> sigma(n, 0.0);
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -343,7 +346,7 @@ CalibrationResult calibrate(const CalibrationProblem& problem, Model& model, con
   for (int s = 0; s < std::max(1, options.starts); ++s) found.push_back(search.run(s, startPoint(s, initial_x)));
   const LocalMinimum best = *std::min_element(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.chi2 < b.chi2; });
 
-  const std::vector<double> sigma = unitSigmas(evaluator, best.x, options.curvature_step);
+  const std::vector<double> sigma = unitSigmas(evaluator, best.x, options.curvature_step, result.curvature_eigenvalues);
   const std::vector<double> best_values = valuesOf(specs, best.x);
   for (int i = 0; i < n; ++i) {
     FittedParameter p;

@@ -1,33 +1,45 @@
-// The diagnosis procedure (diagnose.hpp): baseline, signatures, one calibration per fold and cause,
-// ranking and verdict.
+// The diagnosis procedure (diagnose.hpp): nominal prediction, calibrated baseline, the test of its
+// residuals, one calibration per fold and model, evidence and verdict.
 #include "demfem/campaign/diagnose.hpp"
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <map>
+#include <numbers>
 #include <set>
 #include <stdexcept>
 
 namespace demfem::campaign {
 namespace {
 
-// The residuals of the cases whose baseline ran: a case the study as given cannot simulate (a DEM
+using Clock = std::chrono::steady_clock;
+using nlohmann::ordered_json;
+
+double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::string number(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", v);
+  return buffer;
+}
+
+template <class T>
+bool contains(const std::vector<T>& v, const T& x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
+
+// The residuals of the cases whose nominal run ran: a case the study as given cannot simulate (a DEM
 // blow-up) says nothing about a discrepancy, and scoring its missing quantities as 0 would credit
 // any extension whose runs happen not to fail.
 std::vector<Residual> comparable(const std::vector<Residual>& residuals, const std::vector<analysis::CaseKey>& failed) {
   std::vector<Residual> out;
   for (const Residual& r : residuals)
-    if (std::find(failed.begin(), failed.end(), r.key) == failed.end()) out.push_back(r);
+    if (!contains(failed, r.key)) out.push_back(r);
   return out;
 }
-
-
-using Clock = std::chrono::steady_clock;
-using nlohmann::ordered_json;
-
-double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 std::vector<analysis::Recording> ofKind(const std::vector<analysis::Recording>& recordings, analysis::CaseKind kind) {
   std::vector<analysis::Recording> out;
@@ -67,41 +79,21 @@ std::vector<const Cause*> candidates(const std::vector<analysis::Recording>& rec
   return out;
 }
 
-struct FoldOutcome {
-  std::vector<std::string> unidentified;         // per fold that could not identify the extension
-  std::vector<analysis::CaseKey> held_out_cases;  // the folds that identified every parameter
-  std::vector<Residual> held_out;
-  int model_runs = 0;
-};
-
-// Leave one case out: fit on the others, predict the one. A fold whose fit leaves a parameter
-// unidentified predicts nothing (a layer only the held-out depth reaches) and is listed.
-FoldOutcome crossValidate(const Extension& e, const std::string& id, const std::string& origin,
-                          const std::vector<analysis::Recording>& recordings, Model& model, const DiagnosisSettings& settings) {
-  FoldOutcome out;
-  const auto cases = casesOf(recordings);
-  for (std::size_t f = 0; f < cases.size(); ++f) {
-    if (settings.on_stage) settings.on_stage("fitting " + id + ", fold " + std::to_string(f + 1) + "/" + std::to_string(cases.size()));
-    CalibrationProblem problem{e.study, origin, {}, e.parameters};
-    std::vector<analysis::Recording> test;
-    for (const auto& r : recordings) (r.key == cases[f] ? test : problem.recordings).push_back(r);
-    const CalibrationResult fit = calibrate(problem, model, settings.calibration);
-    out.model_runs += fit.model_runs;
-    const auto unidentified = std::find_if(fit.parameters.begin(), fit.parameters.end(), [](const FittedParameter& p) { return !p.identified; });
-    if (unidentified != fit.parameters.end()) {
-      out.unidentified.push_back(unidentified->spec.label() + " without the case " + cases[f].title());
-      continue;
-    }
-    const auto residuals = predict(fit.calibrated_study, origin, test, model, settings.calibration);
-    out.held_out.insert(out.held_out.end(), residuals.begin(), residuals.end());
-    out.held_out_cases.push_back(cases[f]);
+// The quantities the models are fitted and judged on: those of the candidates' signatures
+// (Cause::judged_on; empty = every quantity).
+std::vector<std::string> judgedQuantities(const std::vector<const Cause*>& causes) {
+  std::vector<std::string> out;
+  for (const Cause* c : causes) {
+    if (c->judged_on.empty()) return {};
+    for (const std::string& q : c->judged_on)
+      if (!contains(out, q)) out.push_back(q);
   }
   return out;
 }
 
-// The model's seed scatter of every soil-bin quantity of `recordings` (diagnose.hpp, step 5): the
-// study's runs at `seeds` deposition seeds (the first is the baseline's run, from the run cache),
-// per case and quantity the sample standard deviation of the seeds that ran.
+// The model's seed scatter of every soil-bin quantity of `recordings` (diagnose.hpp, step 1): the
+// study's runs at `seeds` deposition seeds (the first is the nominal run, from the run cache), per
+// case and quantity the sample standard deviation of the seeds that ran.
 std::vector<SeedScatter> seedScatter(const ordered_json& study, const std::string& origin, const std::vector<analysis::Recording>& recordings,
                                      Model& model, const CalibrationOptions& whole_stroke, int seeds) {
   const std::vector<analysis::Recording> soil = ofKind(recordings, analysis::CaseKind::SoilBin);
@@ -128,174 +120,304 @@ std::vector<SeedScatter> seedScatter(const ordered_json& study, const std::strin
   return out;
 }
 
-const SeedScatter* scatterOf(const std::vector<SeedScatter>& scatter, const Residual& r) {
-  const auto it = std::find_if(scatter.begin(), scatter.end(), [&](const SeedScatter& s) { return s.key == r.key && s.quantity == r.quantity; });
-  return it == scatter.end() ? nullptr : &*it;
+// What every fit, test and evidence of one diagnosis shares.
+struct Context {
+  const ordered_json& study;
+  const std::string& origin;
+  const std::vector<analysis::Recording>& recordings;  // of the judged domain
+  Model& model;
+  const DiagnosisSettings& settings;
+  CalibrationOptions fits;  // judged quantities, model-form tolerance
+  std::vector<SeedScatter> seed_scatter;
+  std::vector<analysis::CaseKey> failed;
+};
+
+// A residual's sigma of step 3: the fit's (measured scatter and model-form tolerance, objective.hpp)
+// widened by the model's seed scatter of a mean over the fits' model seeds.
+double testSigma(const Residual& r, const Context& c) {
+  const auto it = std::find_if(c.seed_scatter.begin(), c.seed_scatter.end(),
+                               [&](const SeedScatter& s) { return s.key == r.key && s.quantity == r.quantity; });
+  const double model = it == c.seed_scatter.end() ? 0.0 : it->sd * it->sd / std::max(1, c.fits.model_seeds);
+  return std::sqrt(r.sigma * r.sigma + model);
 }
 
-// A residual's sigma widened by the model's seed scatter of a mean over `model_seeds` runs,
-// sqrt(sigma^2 + s_model^2 / M) (diagnose.hpp, step 5): the scatter of a correct model's residual.
-double widenedSigma(const Residual& r, const std::vector<SeedScatter>& scatter, int model_seeds) {
-  const SeedScatter* s = scatterOf(scatter, r);
-  return std::sqrt(r.sigma * r.sigma + (s ? s->sd * s->sd / std::max(1, model_seeds) : 0.0));
-}
-
-double chi2WithScatter(const std::vector<Residual>& residuals, const std::vector<SeedScatter>& scatter, int model_seeds) {
+double testChi2(const std::vector<Residual>& residuals, const Context& c) {
   double sum = 0;
-  for (const Residual& r : residuals) sum += std::pow((r.simulated - r.measured) / widenedSigma(r, scatter, model_seeds), 2);
+  for (const Residual& r : residuals) sum += std::pow((r.simulated - r.measured) / testSigma(r, c), 2);
   return sum;
 }
 
-// The error a correct model shows from the scatter alone (diagnose.hpp, step 4): RMS over the
-// residuals of 100 widenedSigma / |measured|, percent.
-double noiseErrorPercent(const std::vector<Residual>& residuals, const std::vector<SeedScatter>& scatter, int model_seeds) {
+double noiseErrorPercent(const std::vector<Residual>& residuals, const Context& c) {
   double sum = 0;
   int n = 0;
   for (const Residual& r : residuals) {
     if (r.measured == 0) continue;
-    sum += std::pow(100 * widenedSigma(r, scatter, model_seeds) / r.measured, 2);
+    sum += std::pow(100 * testSigma(r, c) / r.measured, 2);
     ++n;
   }
   return n > 0 ? std::sqrt(sum / n) : 0.0;
 }
 
-// Whether `cause` is judged on the quantity of `r` (Cause::judged_on).
-bool judges(const Cause& cause, const Residual& r) {
-  return cause.judged_on.empty() || std::find(cause.judged_on.begin(), cause.judged_on.end(), r.quantity) != cause.judged_on.end();
-}
-
-std::string joined(const std::vector<std::string>& parts) {
-  std::string s;
-  for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
-  return s;
-}
-
-CauseResult assess(const Cause& cause, const Diagnosis& base, const ordered_json& study, const std::string& origin,
-                   const std::vector<analysis::Recording>& recordings, Model& model, const DiagnosisSettings& settings) {
-  const auto start = Clock::now();
-  CauseResult r;
-  r.id = cause.id;
-  r.description = cause.description;
-  r.expected_signature = cause.expected_signature;
-  r.judged_on = cause.judged_on;
-  r.match = cause.match(base.signatures, settings.tolerance);
-  if (!r.match.plausible) return r;
-  const std::vector<analysis::Recording> own = ofKind(recordings, cause.domain);
-  const Extension e = cause.extend(study, depthsOf(own));
-  if (e.parameters.empty()) throw ArgumentError("cause '" + cause.id + "': the study offers nothing to fit for it");
-  r.fitted = true;
-  DiagnosisSettings judged = settings;  // the fits see the quantities of the cause's signature only
-  judged.calibration.objective.only_quantities = cause.judged_on;
-  const auto cases = casesOf(own);
-  FoldOutcome folds;
-  if (cases.size() >= 2) folds = crossValidate(e, cause.id, origin, own, model, judged);
-  if (settings.on_stage) settings.on_stage("fitting " + cause.id + " on all cases");
-  const CalibrationResult all = calibrate({e.study, origin, own, e.parameters}, model, judged.calibration);
-  r.parameters = all.parameters;
-  r.minima = static_cast<int>(all.minima.size());
-  r.extended_study = all.calibrated_study;
-  r.residuals = all.residuals;
-  r.runs = all.calibrated_runs;
-  r.chi2 = all.chi2;
-  r.model_runs = folds.model_runs + all.model_runs;
-  r.held_out_folds = static_cast<int>(folds.held_out_cases.size());
-  r.held_out = r.held_out_folds > 0;
-  const std::string folds_used = std::to_string(folds.held_out_cases.size()) + " of " + std::to_string(cases.size()) + " folds";
-  r.split = !r.held_out && cases.size() < 2 ? "one case only: ranked on all cases (in-sample)"
-            : !r.held_out ? "no split can identify the extension (" + joined(folds.unidentified) + "): ranked on all cases (in-sample)"
-            : folds.unidentified.empty()
-                ? "leave one case out (" + std::to_string(cases.size()) + " folds)"
-                : "leave one case out, " + folds_used + " (a split cannot identify " + joined(folds.unidentified) + ")";
-  std::vector<Residual> before, before_all;
-  for (const Residual& b : comparable(base.baseline_residuals, base.failed_baseline_cases)) {
-    if (b.key.kind != cause.domain || !judges(cause, b)) continue;
-    before_all.push_back(b);
-    if (!r.held_out || std::find(folds.held_out_cases.begin(), folds.held_out_cases.end(), b.key) != folds.held_out_cases.end())
-      before.push_back(b);
+// Step 3: z and two-sided p per residual, Holm's step-down at the family-wise level.
+std::vector<Localisation> localise(const std::vector<Residual>& residuals, const Context& c) {
+  std::vector<Localisation> out;
+  for (const Residual& r : comparable(residuals, c.failed)) {
+    Localisation l{r.key, r.quantity, r.measured, r.simulated, testSigma(r, c)};
+    l.residual_percent = r.measured != 0 ? 100 * (r.simulated - r.measured) / r.measured : 0.0;
+    l.z = (r.simulated - r.measured) / l.sigma;
+    l.p_value = std::erfc(std::abs(l.z) / std::numbers::sqrt2);
+    out.push_back(l);
   }
-  r.error_before_percent = errorPercent(before);
-  const std::vector<Residual> after = comparable(r.held_out ? folds.held_out : all.residuals, base.failed_baseline_cases);
-  r.error_after_percent = errorPercent(after);
-  const int m = settings.calibration.model_seeds;
-  r.noise_error_percent = noiseErrorPercent(before, base.seed_scatter, m);
-  // An error below the noise's is not resolved: what an extension cuts beneath it is the packing of
-  // the seeds it ran, not the cause.
-  const double resolved_after = std::max(r.error_after_percent, r.noise_error_percent);
-  r.gain_percent = r.error_before_percent > 0 ? 100 * (r.error_before_percent - resolved_after) / r.error_before_percent : 0.0;
-  const std::vector<Residual> fitted_all = comparable(all.residuals, base.failed_baseline_cases);
-  const double n = static_cast<double>(fitted_all.size());
-  r.bic = chi2WithScatter(fitted_all, base.seed_scatter, m) + static_cast<double>(e.parameters.size()) * std::log(n);
-  r.delta_bic = r.bic - chi2WithScatter(before_all, base.seed_scatter, m);
-  r.wall_time_s = secondsSince(start);
-  return r;
-}
-
-// The quantities of `ran` that no cause of `causes` is judged on, each with the baseline's error.
-std::vector<UnjudgedQuantity> unjudgedQuantities(const std::vector<Residual>& ran, const std::vector<const Cause*>& causes) {
-  std::vector<UnjudgedQuantity> out;
-  for (const std::string& name : quantityNames()) {
-    std::vector<Residual> of;
-    for (const Residual& r : ran)
-      if (r.quantity == name) of.push_back(r);
-    if (of.empty()) continue;
-    const auto judgesIt = [&](const Cause* c) { return c->domain == of.front().key.kind && judges(*c, of.front()); };
-    if (std::none_of(causes.begin(), causes.end(), judgesIt)) out.push_back({name, errorPercent(of)});
+  std::vector<std::size_t> order(out.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return out[a].p_value < out[b].p_value; });
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    if (out[order[k]].p_value > c.settings.significance_level / static_cast<double>(order.size() - k)) break;
+    out[order[k]].significant = true;
   }
   return out;
 }
 
-void rank(std::vector<CauseResult>& ranking) {
-  std::stable_sort(ranking.begin(), ranking.end(), [](const CauseResult& a, const CauseResult& b) {
-    if (a.fitted != b.fitted) return a.fitted;
-    if (!a.fitted) return false;
-    if (a.error_after_percent != b.error_after_percent) return a.error_after_percent < b.error_after_percent;
-    return a.delta_bic < b.delta_bic;
-  });
+int significantCount(const std::vector<Residual>& residuals, const Context& c) {
+  const auto l = localise(residuals, c);
+  return static_cast<int>(std::count_if(l.begin(), l.end(), [](const Localisation& x) { return x.significant; }));
 }
 
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", v);
-  return buffer;
+// The baseline's parameters with the causes' extensions: the extended study and every parameter,
+// a cause's range replacing the baseline's for the same pointer.
+Extension combined(const std::vector<const Cause*>& causes, const Context& c) {
+  Extension out{c.study, c.settings.baseline_fit};
+  for (const Cause* cause : causes) {
+    const Extension e = cause->extend(out.study, depthsOf(c.recordings));
+    if (e.parameters.empty()) throw ArgumentError("cause '" + cause->id + "': the study offers nothing to fit for it");
+    out.study = e.study;
+    for (const ParameterSpec& p : e.parameters) {
+      const auto same = std::find_if(out.parameters.begin(), out.parameters.end(), [&](const ParameterSpec& q) { return q.pointer == p.pointer; });
+      if (same == out.parameters.end()) out.parameters.push_back(p);
+      else *same = p;
+    }
+  }
+  return out;
 }
 
-void decide(Diagnosis& d, const ordered_json& study, const DiagnosisSettings& settings) {
-  d.extended_study = study;
-  if (d.baseline_error_percent < settings.min_error_percent) {
-    d.reason = "the baseline error on all cases, " + number(d.baseline_error_percent) + " %, is below the threshold of " +
-               number(settings.min_error_percent) + " %";
+// A fold's fit predicts its case when the data bound every parameter within the optimiser's box
+// (calibration.hpp: sigma_x <= unidentified_fraction, no flat direction); a parameter known to
+// worse than unidentified_relative of its value may still predict well, which the held-out error
+// then measures.
+CalibrationOptions foldFits(CalibrationOptions options) {
+  options.unidentified_relative = std::numeric_limits<double>::infinity();
+  return options;
+}
+
+// Leave one case out: fit on the others, predict the one. A fold whose fit leaves a parameter
+// unidentified predicts nothing and is listed in `unidentified`.
+void crossValidate(const Extension& e, const std::string& id, const Context& c, ModelFit& fit, std::vector<std::string>& unidentified) {
+  const auto cases = casesOf(c.recordings);
+  if (cases.size() < 2) return;
+  for (std::size_t f = 0; f < cases.size(); ++f) {
+    if (c.settings.on_stage) c.settings.on_stage("fitting " + id + ", fold " + std::to_string(f + 1) + "/" + std::to_string(cases.size()));
+    CalibrationProblem problem{e.study, c.origin, {}, e.parameters};
+    std::vector<analysis::Recording> test;
+    for (const auto& r : c.recordings) (r.key == cases[f] ? test : problem.recordings).push_back(r);
+    const CalibrationResult trained = calibrate(problem, c.model, foldFits(c.fits));
+    fit.model_runs += trained.model_runs;
+    const auto loose = std::find_if(trained.parameters.begin(), trained.parameters.end(), [](const FittedParameter& p) { return !p.identified; });
+    if (loose != trained.parameters.end()) {
+      unidentified.push_back(loose->spec.label() + " without the case " + cases[f].title());
+      continue;
+    }
+    const auto predicted = predict(trained.calibrated_study, c.origin, test, c.model, c.fits);
+    fit.held_out.insert(fit.held_out.end(), predicted.begin(), predicted.end());
+    fit.held_out_cases.push_back(cases[f]);
+  }
+}
+
+// ln of the Gaussian volume of the fit inside the unit prior box (step 4): per eigen direction of
+// J^T J, sqrt(2 pi / lambda), at most the box's width 1 (a flat direction costs nothing).
+double logOccam(const std::vector<double>& eigenvalues) {
+  double sum = 0;
+  for (double lambda : eigenvalues)
+    if (lambda > 0) sum += std::min(0.0, 0.5 * std::log(2 * std::numbers::pi / lambda));
+  return sum;
+}
+
+std::string joined(const std::vector<std::string>& parts, const std::string& separator) {
+  std::string s;
+  for (const auto& p : parts) s += (s.empty() ? "" : separator) + p;
+  return s;
+}
+
+// Fits one model (steps 2, 4): on all cases and per fold; its chi2, evidence and significant residuals.
+ModelFit fitModel(const std::vector<const Cause*>& causes, const Context& c) {
+  const auto start = Clock::now();
+  ModelFit fit;
+  for (const Cause* cause : causes) fit.causes.push_back(cause->id);
+  const Extension e = combined(causes, c);
+  std::vector<std::string> unidentified;
+  crossValidate(e, fit.id(), c, fit, unidentified);
+  if (c.settings.on_stage) c.settings.on_stage("fitting " + fit.id() + " on all cases");
+  const CalibrationResult all = calibrate({e.study, c.origin, c.recordings, e.parameters}, c.model, c.fits);
+  fit.parameters = all.parameters;
+  fit.minima = static_cast<int>(all.minima.size());
+  fit.extended_study = all.calibrated_study;
+  fit.residuals = all.residuals;
+  fit.runs = all.calibrated_runs;
+  fit.model_runs += all.model_runs;
+  fit.held_out_folds = static_cast<int>(fit.held_out_cases.size());
+  const std::size_t cases = casesOf(c.recordings).size();
+  fit.split = cases < 2 ? "one case only: in-sample"
+              : !fit.heldOut() ? "no split can identify it (" + joined(unidentified, "; ") + "): in-sample"
+              : unidentified.empty() ? "leave one case out (" + std::to_string(cases) + " folds)"
+                                     : "leave one case out, " + std::to_string(fit.held_out_folds) + " of " + std::to_string(cases) +
+                                           " folds (a split cannot identify " + joined(unidentified, "; ") + ")";
+  const std::vector<Residual> fitted = comparable(all.residuals, c.failed);
+  fit.chi2 = testChi2(fitted, c);
+  fit.log_likelihood = -fit.chi2 / 2;
+  fit.log_occam = logOccam(all.curvature_eigenvalues);
+  fit.log_evidence = fit.log_likelihood + fit.log_occam;
+  fit.significant = significantCount(fitted, c);
+  fit.wall_time_s = secondsSince(start);
+  return fit;
+}
+
+// Step 5 for `fit` against the calibrated baseline's folds.
+void measureBenefit(ModelFit& fit, const ModelFit& baseline, const Context& c) {
+  std::vector<Residual> before, after;
+  if (fit.heldOut()) {
+    for (const Residual& r : comparable(baseline.held_out, c.failed))
+      if (contains(fit.held_out_cases, r.key)) before.push_back(r);
+    after = comparable(fit.held_out, c.failed);
+  } else {
+    before = comparable(baseline.residuals, c.failed);
+    after = comparable(fit.residuals, c.failed);
+  }
+  fit.error_before_percent = errorPercent(before);
+  fit.error_after_percent = errorPercent(after);
+  fit.noise_error_percent = noiseErrorPercent(before, c);
+  const double resolved_after = std::max(fit.error_after_percent, fit.noise_error_percent);
+  fit.gain_percent = fit.error_before_percent > 0 ? 100 * (fit.error_before_percent - resolved_after) / fit.error_before_percent : 0.0;
+  fit.held_out_chi2_before = testChi2(before, c);
+  fit.held_out_chi2_after = testChi2(after, c);
+  const double expected = static_cast<double>(after.size());
+  fit.chi2_gain_percent = fit.held_out_chi2_before > 0
+                              ? 100 * (fit.held_out_chi2_before - std::max(fit.held_out_chi2_after, expected)) / fit.held_out_chi2_before
+                              : 0.0;
+  fit.ln_bayes_factor = fit.log_evidence - baseline.log_evidence;
+}
+
+// Posterior probabilities of the baseline and the models (equal prior odds, step 4); models sorted
+// most probable first.
+void posterior(ModelFit& baseline, std::vector<ModelFit>& models) {
+  double top = baseline.log_evidence;
+  for (const ModelFit& m : models) top = std::max(top, m.log_evidence);
+  double sum = std::exp(baseline.log_evidence - top);
+  for (const ModelFit& m : models) sum += std::exp(m.log_evidence - top);
+  baseline.probability = std::exp(baseline.log_evidence - top) / sum;
+  for (ModelFit& m : models) m.probability = std::exp(m.log_evidence - top) / sum;
+  std::stable_sort(models.begin(), models.end(), [](const ModelFit& a, const ModelFit& b) { return a.log_evidence > b.log_evidence; });
+}
+
+// Whether one cause's parameters are all among the other's (mass_damping within damping_form): the
+// pair is the larger cause alone.
+bool redundantPair(const Cause& a, const Cause& b, const Context& c) {
+  const auto pointers = [&](const Cause& x) {
+    std::set<std::string> out;
+    for (const ParameterSpec& p : x.extend(c.study, depthsOf(c.recordings)).parameters) out.insert(p.pointer);
+    return out;
+  };
+  const auto pa = pointers(a), pb = pointers(b);
+  return std::includes(pa.begin(), pa.end(), pb.begin(), pb.end()) || std::includes(pb.begin(), pb.end(), pa.begin(), pa.end());
+}
+
+// Step 4's pairs: each of the two most probable single causes with every other cause.
+std::vector<ModelFit> fitPairs(const std::vector<ModelFit>& singles, const std::vector<const Cause*>& causes, const Context& c) {
+  std::vector<ModelFit> out;
+  std::set<std::set<std::string>> done;
+  for (std::size_t k = 0; k < std::min<std::size_t>(2, singles.size()); ++k) {
+    const Cause& first = findCause(singles[k].causes.front());
+    for (const Cause* other : causes) {
+      if (other->id == first.id || !done.insert({first.id, other->id}).second || redundantPair(first, *other, c)) continue;
+      out.push_back(fitModel({&first, other}, c));
+    }
+  }
+  return out;
+}
+
+// "quantity Q at case C: x % off, n standard errors; ..." for the significant residuals.
+std::string significantText(const std::vector<Localisation>& localisation) {
+  std::string text;
+  for (const Localisation& l : localisation)
+    if (l.significant)
+      text += (text.empty() ? "" : "; ") + l.quantity + " at " + l.key.title() + ": " + number(l.residual_percent) + " % off, " +
+              number(std::abs(l.z)) + " standard errors";
+  return text;
+}
+
+const Localisation& largest(const std::vector<Localisation>& localisation) {
+  return *std::max_element(localisation.begin(), localisation.end(), [](const auto& a, const auto& b) { return std::abs(a.z) < std::abs(b.z); });
+}
+
+// Step 6's conditions for naming `m` ("" when it qualifies, else why not).
+std::string notNamed(const ModelFit& m, const DiagnosisSettings& s) {
+  if (m.ln_bayes_factor < s.min_ln_bayes_factor)
+    return "ln B " + number(m.ln_bayes_factor) + " < " + number(s.min_ln_bayes_factor);
+  if (m.significant > 0) return std::to_string(m.significant) + " residual(s) still significant";
+  if (m.heldOut() && m.held_out_folds < s.min_held_out_folds)
+    return "predicts " + std::to_string(m.held_out_folds) + " held-out case(s), fewer than " + std::to_string(s.min_held_out_folds);
+  if (m.heldOut() && m.chi2_gain_percent < s.min_gain_percent)
+    return "held-out chi2 gain " + number(m.chi2_gain_percent) + " % < " + number(s.min_gain_percent) + " %";
+  return "";
+}
+
+void decide(Diagnosis& d, const DiagnosisSettings& s) {
+  d.extended_study = d.baseline.extended_study;
+  const std::size_t tests = d.localisation.size();
+  if (std::none_of(d.localisation.begin(), d.localisation.end(), [](const Localisation& l) { return l.significant; })) {
+    d.verdict = Verdict::NoSignificantDiscrepancy;
+    const Localisation& top = d.localisation.empty() ? Localisation{} : largest(d.localisation);
+    d.reason = "every quantity of the calibrated baseline is within noise (Holm, family-wise level " + number(s.significance_level) +
+               " over " + std::to_string(tests) + " residuals; largest: " + top.quantity + " at " + top.key.title() + ", " +
+               number(top.residual_percent) + " %, " + number(std::abs(top.z)) + " standard errors)";
     return;
   }
-  if (d.ranking.empty() || !d.ranking.front().fitted) {
-    d.reason = "no cause's signature is present in the comparison";
-    return;
-  }
-  const CauseResult& best = d.ranking.front();
-  if (best.gain_percent < settings.min_gain_percent) {
-    d.reason = "the best extension (" + best.id + ") cuts the error by " + number(best.gain_percent) + " %, less than the " +
-               number(settings.min_gain_percent) + " % required";
-    return;
-  }
-  if (best.held_out_folds < settings.min_held_out_folds) {
-    d.reason = "the best extension (" + best.id + ") " +
-               (best.held_out ? "predicts " + std::to_string(best.held_out_folds) + " held-out case(s)" : std::string("is fitted in-sample only")) +
-               ", fewer than the " + std::to_string(settings.min_held_out_folds) + " held-out predictions required (" + best.split + ")";
-    return;
-  }
-  if (best.delta_bic > -settings.min_delta_bic) {
-    d.reason = "the best extension (" + best.id + ") changes BIC by " + number(best.delta_bic) + ", not below -" +
-               number(settings.min_delta_bic);
-    return;
-  }
-  d.cause = best.id;
-  d.gain_percent = best.gain_percent;
-  d.extended_study = best.extended_study;
-  d.reason = best.id + " cuts the " + std::string(best.held_out ? "held-out" : "in-sample") + " error from " +
-             number(best.error_before_percent) + " % to " + number(best.error_after_percent) + " % (gain " + number(best.gain_percent) +
-             " %, delta BIC " + number(best.delta_bic) + ")";
+  for (const ModelFit& m : d.models)
+    if (notNamed(m, s).empty()) {
+      d.verdict = Verdict::Cause;
+      d.causes = m.causes;
+      d.gain_percent = m.gain_percent;
+      d.extended_study = m.extended_study;
+      d.reason = m.id() + ": ln B " + number(m.ln_bayes_factor) + " over the calibrated baseline (probability " + number(m.probability) +
+                 "), no residual left significant, " +
+                 (m.heldOut() ? "held-out error " + number(m.error_before_percent) + " % -> " + number(m.error_after_percent) + " % (gain " +
+                                    number(m.gain_percent) + " %, chi2 " + number(m.held_out_chi2_before) + " -> " + number(m.held_out_chi2_after) + ")"
+                              : m.split + ", judged on its evidence");
+      return;
+    }
+  d.verdict = Verdict::UnexplainedDiscrepancy;
+  const std::string best = d.models.empty() ? std::string("no cause fitted") : "best " + d.models.front().id() + ": " + notNamed(d.models.front(), s);
+  d.reason = significantText(d.localisation) + "; the other quantities within noise; no cause or pair of the catalogue explains it (" + best + ")";
 }
 
 }  // namespace
+
+std::string verdictText(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::NoSignificantDiscrepancy:
+      return "no significant discrepancy";
+    case Verdict::Cause:
+      return "cause";
+    case Verdict::UnexplainedDiscrepancy:
+      return "unexplained discrepancy";
+  }
+  return "unknown";
+}
+
+double modelFormPercent(const DiagnosisSettings& settings, const std::string& quantity) {
+  const auto it = settings.model_form_percent.find(quantity);
+  return it != settings.model_form_percent.end() ? it->second : settings.model_form_percent.at("");
+}
+
+std::string ModelFit::id() const { return causes.empty() ? "baseline" : joined(causes, "+"); }
 
 double errorPercent(const std::vector<Residual>& residuals) {
   double sum = 0;
@@ -312,35 +434,56 @@ double errorPercent(const std::vector<Residual>& residuals) {
 Diagnosis diagnose(const ordered_json& study, const std::string& origin, const std::vector<analysis::Recording>& recordings, Model& model,
                    const DiagnosisSettings& given) {
   const auto start = Clock::now();
-  // The model's seed scatter is measured here (step 5) and widens the comparison; the fits keep
-  // the measured sigma so that it is not counted twice.
+  // The model's seed scatter is measured here (step 1) and widens the test; the fits keep the
+  // measured sigma so that it is not counted twice.
   DiagnosisSettings settings = given;
   settings.calibration.model_scatters_like_repeats = false;
   Diagnosis d;
   d.measured = recordings;
   const std::vector<const Cause*> causes = candidates(recordings, settings);
-  if (settings.on_stage) settings.on_stage("baseline prediction");
-  // The baseline runs the whole stroke: the end-of-stroke signature compares like with like.
+  const analysis::CaseKind domain = causes.front()->domain;
+  const std::vector<analysis::Recording> own = ofKind(recordings, domain);
+  if (settings.baseline_fit.empty()) settings.baseline_fit = baselineParameters(study, origin, own, domain);
+  if (settings.on_stage) settings.on_stage("nominal prediction");
+  // The nominal prediction runs the whole stroke: the end-of-stroke signature compares like with like.
   CalibrationOptions whole_stroke = settings.calibration;
   whole_stroke.stroke_ends_with_window = false;
-  d.baseline_residuals = predict(study, origin, recordings, model, whole_stroke, &d.baseline_runs);
-  for (const Residual& r : d.baseline_residuals)
-    if (r.missing && std::find(d.failed_baseline_cases.begin(), d.failed_baseline_cases.end(), r.key) == d.failed_baseline_cases.end())
-      d.failed_baseline_cases.push_back(r.key);
-  const std::vector<Residual> ran = comparable(d.baseline_residuals, d.failed_baseline_cases);
+  d.nominal_residuals = predict(study, origin, recordings, model, whole_stroke, &d.nominal_runs);
+  for (const Residual& r : d.nominal_residuals)
+    if (r.missing && !contains(d.failed_baseline_cases, r.key)) d.failed_baseline_cases.push_back(r.key);
+  const std::vector<Residual> ran = comparable(d.nominal_residuals, d.failed_baseline_cases);
   if (ran.empty()) throw std::runtime_error("diagnose: the study as given fails (DEM blow-up) on every case; nothing to compare");
-  d.baseline_error_percent = errorPercent(ran);
-  d.baseline_chi2 = chi2(ran);
-  d.residual_count = static_cast<int>(d.baseline_residuals.size());
+  d.nominal_error_percent = errorPercent(ran);
   if (settings.on_stage && settings.scatter_seeds > 1) settings.on_stage("the model's seed scatter");
   d.seed_scatter = seedScatter(study, origin, recordings, model, whole_stroke, settings.scatter_seeds);
-  d.noise_error_percent = noiseErrorPercent(ran, d.seed_scatter, settings.calibration.model_seeds);
-  const analysis::ComparisonResult comparison = analysis::compare(recordings, d.baseline_runs, settings.calibration.objective.analysis);
-  d.signatures = analysis::signaturesOf(comparison, settings.signatures);
-  d.unjudged = unjudgedQuantities(ran, causes);
-  for (const Cause* c : causes) d.ranking.push_back(assess(*c, d, study, origin, recordings, model, settings));
-  rank(d.ranking);
-  decide(d, study, settings);
+  d.signatures = analysis::signaturesOf(analysis::compare(recordings, d.nominal_runs, settings.calibration.objective.analysis), settings.signatures);
+  for (const Cause* c : causes)
+    d.considered.push_back({c->id, c->description, c->expected_signature, c->judged_on, c->match(d.signatures, settings.tolerance)});
+
+  Context c{study, origin, own, model, settings, settings.calibration, d.seed_scatter, d.failed_baseline_cases};
+  c.fits.objective.only_quantities = judgedQuantities(causes);
+  for (const std::string& name : quantityNames()) c.fits.objective.model_form_relative[name] = modelFormPercent(settings, name) / 100;
+  d.baseline = fitModel({}, c);
+  measureBenefit(d.baseline, d.baseline, c);
+  d.localisation = localise(d.baseline.residuals, c);
+  for (const std::string& name : quantityNames()) {
+    std::vector<Residual> of;
+    for (const Residual& r : ran)
+      if (r.quantity == name && !c.fits.objective.only_quantities.empty() && !contains(c.fits.objective.only_quantities, name)) of.push_back(r);
+    if (!of.empty()) d.unjudged.push_back({name, errorPercent(of)});
+  }
+  // Signatures order the work (present first); every cause is fitted.
+  std::vector<const Cause*> ordered = causes;
+  std::stable_partition(ordered.begin(), ordered.end(), [&](const Cause* x) { return x->match(d.signatures, settings.tolerance).plausible; });
+  for (const Cause* cause : ordered) d.models.push_back(fitModel({cause}, c));
+  posterior(d.baseline, d.models);
+  if (settings.pairs && !d.models.empty() && d.models.front().significant > 0) {
+    std::vector<ModelFit> pairs = fitPairs(d.models, causes, c);
+    d.models.insert(d.models.end(), pairs.begin(), pairs.end());
+    posterior(d.baseline, d.models);
+  }
+  for (ModelFit& m : d.models) measureBenefit(m, d.baseline, c);
+  decide(d, settings);
   d.wall_time_s = secondsSince(start);
   return d;
 }

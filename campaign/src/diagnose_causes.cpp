@@ -1,5 +1,7 @@
 #include "demfem/campaign/diagnose_causes.hpp"
 
+#include "demfem/campaign/calibration.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -234,25 +236,71 @@ Cause massDamping() {
   return c;
 }
 
-Cause sensorGain() {
+// One channel's calibration factor: `key` of tools[].sensors added at 1, 0.7-1.4.
+Cause sensorGain(const std::string& channel, const char* key) {
   Cause c;
-  c.id = "sensor_gain";
-  c.description = "a calibration-factor error of the load cell or the deformation sensor (tools[].sensors)";
-  c.expected_signature = "one channel's steady ratio off by the same factor at every weight, frequency and damping unchanged";
-  c.match = [](const Signatures& s, const SignatureTolerance& t) {
+  c.id = channel + "_sensor_gain";
+  c.description = "a calibration-factor error of the " + channel + " channel (tools[].sensors." + key + ")";
+  c.expected_signature = "the " + channel + " channel's steady ratio off by the same factor at every weight, frequency and damping unchanged";
+  const bool force = channel == "force";
+  c.match = [force](const Signatures& s, const SignatureTolerance& t) {
     if (s.weight_drops.empty()) return noWeights();
     bool steady = false;
-    for (const auto& w : s.weight_drops) steady |= ratioSign(w.force_ratio, t) != 0 || ratioSign(w.deformation_ratio, t) != 0;
+    for (const auto& w : s.weight_drops) steady |= ratioSign(force ? w.force_ratio : w.deformation_ratio, t) != 0;
     return SignatureMatch{steady, weightEvidence(s)};
   };
-  c.extend = [id = c.id](const ordered_json& study, const std::vector<double>&) {
+  c.extend = [id = c.id, key](const ordered_json& study, const std::vector<double>&) {
     const std::size_t tool = deformableTool(study, id);
     ordered_json extended = study;
     auto& sensors = extended.at("tools")[tool]["sensors"];
-    for (const char* key : {"force_gain", "deformation_gain"})
-      if (!sensors.contains(key)) sensors[key] = 1.0;
-    const std::string base = toolPointer(tool) + "/sensors/";
-    return Extension{extended, {spec(base + "force_gain", 0.7, 1.4, false), spec(base + "deformation_gain", 0.7, 1.4, false)}};
+    if (!sensors.contains(key)) sensors[key] = 1.0;
+    return Extension{extended, {spec(toolPointer(tool) + "/sensors/" + key, 0.7, 1.4, false)}};
+  };
+  return c;
+}
+
+// Both Rayleigh terms of Eq (4) free: the stiffness term over 0.01-10 x the study's (log), the mass
+// term 0-20 1/s. The baseline's alpha_s (0.5-2 x) cannot move the split between the weights.
+Cause dampingForm() {
+  Cause c;
+  c.id = "damping_form";
+  c.description = "the form of the damping: both Rayleigh terms of Eq (4) (tools[].fem.alpha_s and beta_per_s) beyond the nominal alpha_s";
+  c.expected_signature = "damping ratio off differently at the two weights (zeta = alpha omega / 2 + beta / 2 omega), statics unchanged";
+  c.match = [](const Signatures& s, const SignatureTolerance& t) {
+    if (s.weight_drops.empty()) return noWeights();
+    bool damping = false;
+    for (const auto& w : s.weight_drops) damping |= differenceSign(w.damping_difference, t) != 0;
+    return SignatureMatch{damping, weightEvidence(s)};
+  };
+  c.extend = [id = c.id](const ordered_json& study, const std::vector<double>&) {
+    const std::size_t tool = deformableTool(study, id);
+    const double alpha = study.at("tools")[tool].at("fem").at("alpha_s").get<double>();
+    if (!(alpha > 0)) throw ArgumentError("cause '" + id + "': needs alpha_s > 0 (its range is scaled by the study's)");
+    const std::string base = toolPointer(tool) + "/fem/";
+    return Extension{study, {spec(base + "alpha_s", 0.01 * alpha, 10 * alpha, true), spec(base + "beta_per_s", 0.0, 20.0, false)}};
+  };
+  return c;
+}
+
+// Mass on the pan rows the study does not have (weight_drop.added_mass_kg, its weight tared).
+Cause addedMass() {
+  Cause c;
+  c.id = "added_mass";
+  c.description = "unmodelled mass at the tip: pan, hook or a sensor hanging there before the weight (weight_drop.added_mass_kg)";
+  c.expected_signature = "frequency lower, by more at the light weight, statics and force per weight unchanged";
+  c.match = [](const Signatures& s, const SignatureTolerance& t) {
+    if (s.weight_drops.empty()) return noWeights();
+    bool lower = false;
+    for (const auto& w : s.weight_drops) lower |= ratioSign(w.frequency_ratio, t) < 0;
+    return SignatureMatch{lower, weightEvidence(s)};
+  };
+  c.extend = [id = c.id](const ordered_json& study, const std::vector<double>&) {
+    if (!study.contains("weight_drop")) throw ArgumentError("cause '" + id + "': the study has no weight_drop");
+    ordered_json extended = study;
+    auto& drop = extended.at("weight_drop");
+    if (!drop.contains("added_mass_kg")) drop["added_mass_kg"] = 0.0;
+    // Up to the study's weight: a pan as heavy as the weight it carries.
+    return Extension{extended, {spec("/weight_drop/added_mass_kg", 0.0, drop.at("mass_kg").get<double>(), false)}};
   };
   return c;
 }
@@ -349,11 +397,42 @@ Cause endWall() {
   return c;
 }
 
+Cause toolFriction() {
+  Cause c;
+  c.id = "tool_friction";
+  c.domain = analysis::CaseKind::SoilBin;
+  c.judged_on = windowMeans();
+  c.description = "particle-tool friction (soil.interactions[] of the layers reached with the tool's dem_material)";
+  c.expected_signature = "a draught bias of the same sign at every depth, growing with the tool's wetted face";
+  c.match = [](const Signatures& s, const SignatureTolerance& t) {
+    if (s.soil_bins.empty()) return noSoil();
+    bool bias = false;
+    for (const auto& b : s.soil_bins) bias |= std::abs(b.force_bias_percent) > 100 * t.relative;
+    return SignatureMatch{bias, soilEvidence(s)};
+  };
+  c.extend = [id = c.id](const ordered_json& study, const std::vector<double>& depths_mm) {
+    const ordered_json& soil = soilOf(study, id);
+    Extension e{study, {}};
+    for (const auto& tool : study.at("tools")) {
+      if (!tool.contains("dem_material")) continue;
+      for (const std::string& m : reachedLayers(soil, depths_mm))
+        if (auto i = interactionOf(soil, m, tool.at("dem_material")))
+          e.parameters.push_back(spec(interactionPointer(*i, "static_friction"), 0.05, 1.0, false));
+    }
+    return e;
+  };
+  return c;
+}
+
 }  // namespace
 
 const std::vector<Cause>& causeCatalogue() {
-  static const std::vector<Cause> catalogue{youngModulus(), clampCompliance(), massDamping(), sensorGain(),
-                                            layeredSoil(),  cohesion(),        endWall()};
+  static const std::vector<Cause> catalogue{youngModulus(),  clampCompliance(),
+                                            massDamping(),   dampingForm(),
+                                            addedMass(),     sensorGain("force", "force_gain"),
+                                            sensorGain("deformation", "deformation_gain"),
+                                            layeredSoil(),   cohesion(),
+                                            endWall(),       toolFriction()};
   return catalogue;
 }
 
@@ -364,6 +443,28 @@ const Cause& findCause(const std::string& id) {
     ids += (ids.empty() ? "" : ", ") + c.id;
   }
   throw ArgumentError("unknown cause '" + id + "' (causes: " + ids + ")");
+}
+
+std::vector<ParameterSpec> baselineParameters(const ordered_json& study, const std::string& origin,
+                                              const std::vector<analysis::Recording>& recordings, analysis::CaseKind domain) {
+  switch (domain) {
+    case analysis::CaseKind::CalibrationWeight: {
+      const std::size_t tool = deformableTool(study, "baseline");
+      const auto& fem = study.at("tools")[tool].at("fem");
+      if (!fem.contains("E_Pa")) throw ArgumentError("baseline: the tool's matrices are given, it has no E_Pa (give --baseline-fit)");
+      const double E = fem.at("E_Pa"), alpha = fem.at("alpha_s");
+      const std::string base = toolPointer(tool) + "/fem/";
+      return {spec(base + "E_Pa", E / 1.1, E * 1.1, true),
+              alpha > 0 ? spec(base + "alpha_s", alpha / 2, alpha * 2, true) : spec(base + "alpha_s", 1e-6, 1e-2, true)};
+    }
+    case analysis::CaseKind::SoilBin: {
+      std::vector<ParameterSpec> out;
+      for (const Stage& stage : layeredSoilPreset(study, origin, recordings))
+        out.insert(out.end(), stage.parameters.begin(), stage.parameters.end());
+      return out;
+    }
+  }
+  throw ArgumentError("baseline: unknown case kind");
 }
 
 }  // namespace demfem::campaign

@@ -16,20 +16,11 @@ namespace {
 using namespace analysis::report;
 
 
-// One cause of the ranking; fitted causes carry their rank (from 1).
-struct CauseRow {
-  std::optional<long long> rank;
-  const CauseResult* cause;
-};
-
-// A fitted cause's number; absent (null, "nan") for a cause that was not fitted.
-CellValue ifFitted(const CauseResult& c, double value) { return c.fitted ? std::optional<double>(value) : std::nullopt; }
-
-// "label = value +- sigma; ..." of a cause's fitted parameters, from the parameter table's values.
-std::string fittedValues(const CauseResult& c) {
-  const Section<ParameterRow> section = parameterSection("cause");
+// "label = value +- sigma; ..." of a model's fitted parameters, from the parameter table's values.
+std::string fittedValues(const ModelFit& m) {
+  const Section<ParameterRow> section = parameterSection("model");
   std::string values;
-  for (const ParameterRow& row : parameterRows(c.id, c.parameters)) {
+  for (const ParameterRow& row : parameterRows(m.id(), m.parameters)) {
     const RowValues p = section.values(row);
     values += (values.empty() ? "" : "; ") + csvText(p["label"]) + " = " +
               (p.flag("identified") ? shortNum(p.number("value")) + " +- " + shortNum(p.number("std_dev"), 2) : std::string("unidentified"));
@@ -37,67 +28,75 @@ std::string fittedValues(const CauseResult& c) {
   return values;
 }
 
-// The quantities a cause is fitted and judged on, space-separated ("all" for every quantity of its domain).
-std::string judgedOn(const CauseResult& c) {
-  std::string names;
-  for (const std::string& q : c.judged_on) names += (names.empty() ? "" : " ") + q;
-  return names.empty() ? std::string("all") : names;
-}
-
-// "yes", or how many distinct minima fit within the noise.
-std::string uniqueness(const RowValues& v) {
-  return v.flag("unique_fit") ? std::string("yes") : "no: " + csvText(v["distinct_minima"]) + " distinct minima within the noise";
-}
-
-// ranking.csv (and `ranking` of the JSON, each cause with its `parameters`): the causes in rank order.
-const Section<CauseRow>& rankingSection() {
-  using R = CauseRow;
-  const auto whenFitted = [](MarkdownCell cell) { return md::onlyIf("fitted", std::move(cell), ""); };
+// models.csv (and `models` of the JSON, each with its `causes` and `parameters`): the calibrated
+// baseline, then the models most probable first.
+const Section<const ModelFit*>& modelSection() {
+  using R = const ModelFit*;
   static const Section<R> section{
-      {{"rank", [](const R& r) -> CellValue { return r.rank ? std::optional<double>(static_cast<double>(*r.rank)) : std::nullopt; }},
-       {"id", [](const R& r) -> CellValue { return r.cause->id; }},
-       {"plausible", [](const R& r) -> CellValue { return r.cause->match.plausible; }},
-       {"fitted", [](const R& r) -> CellValue { return r.cause->fitted; }},
-       {"unique_fit", [](const R& r) -> CellValue { return r.cause->fitted && r.cause->minima == 1; }},
-       {"distinct_minima", [](const R& r) -> CellValue { return static_cast<long long>(r.cause->minima); }},
-       {"held_out", [](const R& r) -> CellValue { return r.cause->held_out; }},
-       {"held_out_folds", [](const R& r) -> CellValue { return static_cast<long long>(r.cause->held_out_folds); }},
-       {"split", [](const R& r) -> CellValue { return r.cause->split; }},
-       {"error_before_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_before_percent); }},
-       {"error_after_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->error_after_percent); }},
-       {"noise_error_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->noise_error_percent); }},
-       {"gain_percent", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->gain_percent); }},
-       {"chi2", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->chi2); }},
-       {"bic", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->bic); }},
-       {"delta_bic", [](const R& r) -> CellValue { return ifFitted(*r.cause, r.cause->delta_bic); }},
-       {"model_runs", [](const R& r) -> CellValue { return static_cast<long long>(r.cause->model_runs); }},
-       {"wall_time_s", [](const R& r) -> CellValue { return r.cause->wall_time_s; }},
-       {"description", [](const R& r) -> CellValue { return r.cause->description; }},
-       {"expected_signature", [](const R& r) -> CellValue { return r.cause->expected_signature; }},
-       {"judged_on", [](const R& r) -> CellValue { return judgedOn(*r.cause); }},
-       {"evidence", [](const R& r) -> CellValue { return r.cause->match.evidence; }},
-       {"fitted_values", [](const R& r) -> CellValue { return fittedValues(*r.cause); }, Output::MarkdownOnly}},
-      [](const R& r) { return r.rank ? std::to_string(*r.rank) : std::string("-"); },
-      {{"cause", md::text("id")},
-       {"fitted values (+- one sigma)", md::onlyIf("fitted", md::text("fitted_values"), "not fitted: signature absent")},
-       {"unique", whenFitted(uniqueness)},
-       {"error before (%)", whenFitted(md::number("error_before_percent"))},
-       {"error after (%)", whenFitted(md::number("error_after_percent"))},
-       {"gain (%)", whenFitted(md::number("gain_percent"))},
-       {"delta BIC", whenFitted(md::number("delta_bic"))},
-       {"split", whenFitted(md::text("split"))}},
-      "rank"};
+      {{"id", [](R m) -> CellValue { return m->id(); }},
+       {"log_evidence", [](R m) -> CellValue { return m->log_evidence; }},
+       {"probability", [](R m) -> CellValue { return m->probability; }},
+       {"ln_bayes_factor", [](R m) -> CellValue { return m->ln_bayes_factor; }},
+       {"log_likelihood", [](R m) -> CellValue { return m->log_likelihood; }},
+       {"log_occam", [](R m) -> CellValue { return m->log_occam; }},
+       {"chi2", [](R m) -> CellValue { return m->chi2; }},
+       {"significant_residuals", [](R m) -> CellValue { return static_cast<long long>(m->significant); }},
+       {"unique_fit", [](R m) -> CellValue { return m->minima == 1; }},
+       {"held_out", [](R m) -> CellValue { return m->heldOut(); }},
+       {"held_out_folds", [](R m) -> CellValue { return static_cast<long long>(m->held_out_folds); }},
+       {"split", [](R m) -> CellValue { return m->split; }},
+       {"error_before_percent", [](R m) -> CellValue { return m->error_before_percent; }},
+       {"error_after_percent", [](R m) -> CellValue { return m->error_after_percent; }},
+       {"noise_error_percent", [](R m) -> CellValue { return m->noise_error_percent; }},
+       {"gain_percent", [](R m) -> CellValue { return m->gain_percent; }},
+       {"held_out_chi2_before", [](R m) -> CellValue { return m->held_out_chi2_before; }},
+       {"held_out_chi2_after", [](R m) -> CellValue { return m->held_out_chi2_after; }},
+       {"chi2_gain_percent", [](R m) -> CellValue { return m->chi2_gain_percent; }},
+       {"model_runs", [](R m) -> CellValue { return static_cast<long long>(m->model_runs); }},
+       {"wall_time_s", [](R m) -> CellValue { return m->wall_time_s; }},
+       {"fitted_values", [](R m) -> CellValue { return fittedValues(*m); }, Output::MarkdownOnly}},
+      [](R m) { return "`" + m->id() + "`"; },
+      {{"probability", md::number("probability", 3)},
+       {"ln B vs baseline", md::number("ln_bayes_factor", 3)},
+       {"significant residuals", md::text("significant_residuals")},
+       {"held-out error before -> after (%)", md::concat({md::number("error_before_percent", 3), md::literal(" -> "), md::number("error_after_percent", 3)})},
+       {"gain (%)", md::number("gain_percent", 3)},
+       {"held-out chi2 before -> after", md::concat({md::number("held_out_chi2_before", 3), md::literal(" -> "), md::number("held_out_chi2_after", 3)})},
+       {"fitted values (+- one sigma)", md::text("fitted_values")},
+       {"split", md::text("split")}},
+      "model"};
   return section;
 }
 
-std::vector<CauseRow> rankingRows(const Diagnosis& d) {
-  std::vector<CauseRow> rows;
-  long long rank = 0;
-  for (const CauseResult& c : d.ranking) rows.push_back({c.fitted ? std::optional<long long>(++rank) : std::nullopt, &c});
+std::vector<const ModelFit*> modelRows(const Diagnosis& d) {
+  std::vector<const ModelFit*> rows{&d.baseline};
+  for (const ModelFit& m : d.models) rows.push_back(&m);
   return rows;
 }
 
-std::vector<ParameterRow> causeParameterRows(const CauseRow& row) { return parameterRows(row.cause->id, row.cause->parameters); }
+// localisation.csv (and `localisation` of the JSON): the calibrated baseline's residuals tested.
+const Section<Localisation>& localisationSection() {
+  using R = Localisation;
+  static const Section<R> section{
+      {{"case", [](const R& l) -> CellValue { return l.key.title(); }},
+       {"quantity", [](const R& l) -> CellValue { return l.quantity; }},
+       {"measured", [](const R& l) -> CellValue { return l.measured; }},
+       {"simulated", [](const R& l) -> CellValue { return l.simulated; }},
+       {"sigma", [](const R& l) -> CellValue { return l.sigma; }},
+       {"residual_percent", [](const R& l) -> CellValue { return l.residual_percent; }},
+       {"z", [](const R& l) -> CellValue { return l.z; }},
+       {"p_value", [](const R& l) -> CellValue { return l.p_value; }},
+       {"significant", [](const R& l) -> CellValue { return l.significant; }}},
+      [](const R& l) { return l.key.title(); },
+      {{"quantity", md::text("quantity")},
+       {"residual (%)", md::number("residual_percent", 3)},
+       {"z", md::number("z", 3)},
+       {"significant", md::onlyIf("significant", md::literal("**yes**"), "no")}},
+      "case"};
+  return section;
+}
+
+std::vector<ParameterRow> modelParameterRows(const ModelFit& m) { return parameterRows(m.id(), m.parameters); }
 
 // Calibrated channels of a recording (raw ones through their factors).
 std::pair<std::vector<double>, std::vector<double>> channels(const analysis::Recording& r) {
@@ -116,12 +115,12 @@ const analysis::Recording* runOf(const std::vector<analysis::Recording>& runs, c
   return nullptr;
 }
 
-// Measured (first repeat), baseline and extended model of one case: force and deformation (or, for
-// soil-bin runs, against time as recorded).
-analysis::Figure caseFigure(const analysis::Recording& measured, const analysis::Recording* baseline, const analysis::Recording* extended,
-                            const std::string& extension) {
+// Measured (first repeat), the model as given, the calibrated baseline and the named model of one
+// case: force and deformation against time as recorded.
+analysis::Figure caseFigure(const analysis::Recording& measured, const analysis::Recording* nominal, const analysis::Recording* baseline,
+                            const analysis::Recording* extended, const std::string& extension) {
   analysis::Figure figure;
-  figure.title = measured.key.title() + ": measured, model as given, model extended by " + extension;
+  figure.title = measured.key.title() + ": measured, model as given, calibrated baseline" + (extended ? ", extended by " + extension : "");
   for (int channel = 0; channel < 2; ++channel) {
     analysis::XYPanel panel;
     panel.x_label = "t (s)";
@@ -132,7 +131,8 @@ analysis::Figure caseFigure(const analysis::Recording& measured, const analysis:
       panel.series.push_back({title, r.time_s, channel == 0 ? force : deformation, color, style, 1.5});
     };
     add(measured, "measured", analysis::kMeasuredColor, analysis::SeriesStyle::Line);
-    if (baseline) add(*baseline, "model as given", analysis::kRepeatColor, analysis::SeriesStyle::DashedLine);
+    if (nominal) add(*nominal, "model as given", analysis::kRepeatColor, analysis::SeriesStyle::DashedLine);
+    if (baseline) add(*baseline, "calibrated baseline", analysis::kRepeatColor, analysis::SeriesStyle::Line);
     if (extended) add(*extended, "extended: " + extension, analysis::kSimulatedColor, analysis::SeriesStyle::Line);
     figure.panels.push_back(panel);
   }
@@ -178,38 +178,78 @@ nlohmann::json unjudgedJson(const std::vector<UnjudgedQuantity>& unjudged) {
 // What no cause was judged on, for report.md ("" when every quantity was).
 std::string unjudgedText(const std::vector<UnjudgedQuantity>& unjudged) {
   if (unjudged.empty()) return "";
-  std::string md = "Not explained by any cause considered (none is judged on these quantities; docs/diagnosis.md): ";
+  std::string md = "Not judged (no cause considered moves these quantities; docs/diagnosis.md): ";
   for (std::size_t i = 0; i < unjudged.size(); ++i)
     md += (i ? ", " : "") + ("`" + unjudged[i].quantity + "` (baseline error " + shortNum(unjudged[i].baseline_error_percent) + " %)");
   return md + ".\n\n";
 }
 
+// Per quantity the model-form tolerance in percent ("" for every other quantity).
+nlohmann::json modelFormJson(const DiagnosisSettings& settings) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [quantity, percent] : settings.model_form_percent) out[quantity.empty() ? "other" : quantity] = percent;
+  return out;
+}
+
+std::string modelFormText(const DiagnosisSettings& settings) {
+  std::string text;
+  for (const auto& [quantity, percent] : settings.model_form_percent)
+    if (!quantity.empty()) text += shortNum(percent) + " % for " + quantity + ", ";
+  return text + shortNum(modelFormPercent(settings, "")) + " % for the other quantities";
+}
+
+const ModelFit* namedModel(const Diagnosis& d) {
+  for (const ModelFit& m : d.models)
+    if (m.causes == d.causes && !d.causes.empty()) return &m;
+  return nullptr;
+}
+
+std::string verdictSentence(const Diagnosis& d) {
+  switch (d.verdict) {
+    case Verdict::NoSignificantDiscrepancy:
+      return "**No significant discrepancy**: " + d.reason + ".";
+    case Verdict::Cause:
+      return "**Cause: " + (namedModel(d) ? "`" + namedModel(d)->id() + "`" : std::string("?")) + "** - " + d.reason + ".";
+    case Verdict::UnexplainedDiscrepancy:
+      return "**Unexplained discrepancy**: " + d.reason + ".";
+  }
+  return d.reason;
+}
+
 }  // namespace
 
 nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, const std::string& extended_study_path) {
-  nlohmann::json ranking = nlohmann::json::array();
-  for (const CauseRow& row : rankingRows(d)) {
-    nlohmann::json cause = rankingSection().json(row);
-    cause["parameters"] = parameterSection("cause").json(causeParameterRows(row));
-    ranking.push_back(cause);
+  nlohmann::json models = nlohmann::json::array();
+  for (const ModelFit* m : modelRows(d)) {
+    nlohmann::json model = modelSection().json(m);
+    model["causes"] = m->causes;
+    model["parameters"] = parameterSection("model").json(modelParameterRows(*m));
+    models.push_back(model);
   }
-  return {{"verdict", d.cause ? "cause" : "no significant discrepancy"},
-          {"cause", d.cause ? nlohmann::json(*d.cause) : nlohmann::json(nullptr)},
+  nlohmann::json localisation = nlohmann::json::array();
+  for (const Localisation& l : d.localisation) localisation.push_back(localisationSection().json(l));
+  nlohmann::json considered = nlohmann::json::array();
+  for (const CauseEvidence& c : d.considered)
+    considered.push_back({{"id", c.id}, {"signature_present", c.match.plausible}, {"evidence", c.match.evidence}, {"judged_on", c.judged_on}});
+  return {{"verdict", verdictText(d.verdict)},
+          {"causes", d.causes},
+          {"cause", d.causes.empty() ? nlohmann::json(nullptr) : nlohmann::json(d.causes.front())},
           {"reason", d.reason},
           {"gain_percent", d.gain_percent},
-          {"baseline_error_percent", d.baseline_error_percent},
-          {"baseline_chi2", d.baseline_chi2},
+          {"localisation", localisation},
+          {"models", models},
+          {"nominal_error_percent", d.nominal_error_percent},
           {"failed_baseline_cases", caseLabels(d.failed_baseline_cases)},
           {"seed_scatter", seedScatterJson(d.seed_scatter)},
-          {"noise_error_percent", d.noise_error_percent},
-          {"residuals", d.residual_count},
-          {"thresholds",
-           {{"min_error_percent", settings.min_error_percent},
+          {"settings",
+           {{"model_form_percent", modelFormJson(settings)},
+            {"significance_level", settings.significance_level},
+            {"min_ln_bayes_factor", settings.min_ln_bayes_factor},
             {"min_gain_percent", settings.min_gain_percent},
-            {"min_delta_bic", settings.min_delta_bic},
             {"min_held_out_folds", settings.min_held_out_folds},
+            {"pairs", settings.pairs},
             {"scatter_seeds", settings.scatter_seeds}}},
-          {"ranking", ranking},
+          {"considered", considered},
           {"unjudged", unjudgedJson(d.unjudged)},
           {"signatures", analysis::toJson(d.signatures)},
           {"extended_study", extended_study_path},
@@ -219,29 +259,25 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
 void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analysis::StagedOutput& out,
                     const analysis::GnuplotRenderer* renderer) {
   out.writeText("extended_study.json", d.extended_study.dump(2) + "\n");
-  std::string md = "# Diagnosis\n\n";
-  md += "**Verdict: " + (d.cause ? "cause `" + *d.cause + "`" : std::string("no significant discrepancy")) + "** - " + d.reason + ".\n\n";
-  if (d.cause) md += "Held-out error cut by the extension: " + shortNum(d.gain_percent) + " %. The extended study is `extended_study.json`.\n\n";
-  md += "Baseline (the study as given) against all cases: error " + shortNum(d.baseline_error_percent) + " % (RMS of 100 (sim - meas) / meas " +
-        "over every quantity of every case), chi2 " + shortNum(d.baseline_chi2) + " over " + std::to_string(d.residual_count) + " residuals.\n\n";
-  md += "Noise: a correct model would show an error of " + shortNum(d.noise_error_percent) + " % from the measured scatter" +
-        (d.seed_scatter.empty() ? std::string() : " and the model's own seed scatter (the baseline at " + std::to_string(settings.scatter_seeds) +
-                                                      " deposition seeds), which also widens the sigma of every BIC") +
-        "; an error below it is not counted as gain (docs/diagnosis.md).\n\n";
+  std::string md = "# Diagnosis\n\n" + verdictSentence(d) + "\n\n";
+  md += "Test: each residual of the calibrated baseline as z = (sim - meas) / sigma, sigma from the measured scatter, the model's seed "
+        "scatter and a model-form tolerance (" + modelFormText(settings) + "); Holm's step-down at a "
+        "family-wise level of " + shortNum(settings.significance_level) + ". A model is named when ln B >= " +
+        shortNum(settings.min_ln_bayes_factor) + " over the calibrated baseline, no residual is left significant and, where a split "
+        "identifies it, it cuts the held-out chi2 by at least " + shortNum(settings.min_gain_percent) + " % (docs/diagnosis.md).\n\n";
+  md += "The study as given: error " + shortNum(d.nominal_error_percent) + " % (RMS of 100 (sim - meas) / meas over every quantity of every case).\n\n";
   if (!d.failed_baseline_cases.empty())
-    md += "Left out of every error and BIC: the cases whose baseline run failed (DEM blow-up): " +
-          caseLabels(d.failed_baseline_cases).dump() + ".\n\n";
+    md += "Left out of every error and test: the cases whose nominal run failed (DEM blow-up): " + caseLabels(d.failed_baseline_cases).dump() + ".\n\n";
   md += unjudgedText(d.unjudged);
-  md += "Thresholds: a cause is named when the baseline error is at least " + shortNum(settings.min_error_percent) +
-        " %, its extension cuts the held-out error by at least " + shortNum(settings.min_gain_percent) +
-        " % and lowers BIC = chi2 + k ln n by at least " + shortNum(settings.min_delta_bic) + ", predicting at least " +
-        std::to_string(settings.min_held_out_folds) + " held-out cases (docs/diagnosis.md).\n\n";
-  md += "## Signatures\n\n" + signatureTable(d.signatures) + "\n## Ranking\n\n" + rankingSection().markdownOf(rankingRows(d)) + "\n## Evidence\n\n";
-  for (const CauseResult& c : d.ranking)
-    md += "- `" + c.id + "` (" + c.description + "): expects " + c.expected_signature + "; fitted and judged on " + judgedOn(c) +
-          " quantities. " + (c.match.plausible ? "Present" : "Absent") + ": " + c.match.evidence + ".\n";
-  md += "\n## Plots\n\n";
-  const CauseResult* shown = d.ranking.empty() || !d.ranking.front().fitted ? nullptr : &d.ranking.front();
+  md += "## Where the residual lives (calibrated baseline)\n\n" + localisationSection().markdownOf(d.localisation);
+  md += "\n## Model probabilities\n\nLaplace evidence, equal prior odds; held-out errors against the calibrated baseline's folds.\n\n" +
+        modelSection().markdownOf(modelRows(d));
+  md += "\n## Signatures (the study as given)\n\n" + signatureTable(d.signatures) + "\n## Causes considered\n\n";
+  for (const CauseEvidence& c : d.considered)
+    md += "- `" + c.id + "` (" + c.description + "): expects " + c.expected_signature + ". Signature " + (c.match.plausible ? "present" : "absent") +
+          ": " + c.match.evidence + ".\n";
+  md += "\n## Before and after\n\n";
+  const ModelFit* named = namedModel(d);
   if (!renderer) md += "Plots were not drawn (--no-plots).\n";
   std::vector<analysis::CaseKey> done;
   for (const analysis::Recording& m : d.measured) {
@@ -249,20 +285,24 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
     done.push_back(m.key);
     if (!renderer) continue;
     const std::string name = "plots/" + m.key.label();
-    renderer->render(caseFigure(m, runOf(d.baseline_runs, m.key), shown ? runOf(shown->runs, m.key) : nullptr, shown ? shown->id : "none"),
+    renderer->render(caseFigure(m, runOf(d.nominal_runs, m.key), runOf(d.baseline.runs, m.key), named ? runOf(named->runs, m.key) : nullptr,
+                                named ? named->id() : ""),
                      out.stage(name + ".gp"), out.stage(name + ".svg"));
     md += "![" + m.key.title() + "](" + name + ".svg)\n\n";
   }
+  md += "\n## Extended study\n\n`extended_study.json`: " +
+        (named ? "the study extended by " + named->id() + " (" + fittedValues(*named) + ")"
+               : "the calibrated baseline (" + fittedValues(d.baseline) + ")") + ".\n";
   md += "\nWall time " + shortNum(d.wall_time_s, 3) + " s.\n";
   out.writeText("report.md", md);
-  const std::vector<CauseRow> rows = rankingRows(d);
   std::vector<ParameterRow> parameters;
-  for (const CauseRow& row : rows)
-    for (const ParameterRow& p : causeParameterRows(row)) parameters.push_back(p);
+  for (const ModelFit* m : modelRows(d))
+    for (const ParameterRow& p : modelParameterRows(*m)) parameters.push_back(p);
   out.writeText("weight_signatures.csv", analysis::weightDropSignatureSection().csv(d.signatures.weight_drops));
   out.writeText("soil_signatures.csv", analysis::soilBinSignatureSection().csv(d.signatures.soil_bins));
-  out.writeText("ranking.csv", rankingSection().csv(rows));
-  out.writeText("parameters.csv", parameterSection("cause").csv(parameters));
+  out.writeText("localisation.csv", localisationSection().csv(d.localisation));
+  out.writeText("models.csv", modelSection().csv(modelRows(d)));
+  out.writeText("parameters.csv", parameterSection("model").csv(parameters));
 }
 
 }  // namespace demfem::campaign

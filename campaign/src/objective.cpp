@@ -19,7 +19,7 @@ struct Estimate {
 using CaseEstimates = std::map<std::string, std::vector<Estimate>>;
 
 // Mean over repeats and the scatter of that mean (header comment).
-Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::vector<Estimate>& repeats, double floor) {
+Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::vector<Estimate>& repeats, const ObjectiveSettings& settings) {
   const auto R = static_cast<double>(repeats.size());
   double mean = 0, own = 0;
   for (const auto& e : repeats) mean += e.value / R, own += e.error * e.error / R;
@@ -27,8 +27,10 @@ Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::
   if (repeats.size() > 1) {
     for (const auto& e : repeats) between += (e.value - mean) * (e.value - mean) / (R - 1);
   }
-  const double sigma = std::sqrt(std::max(between, own) / R);
-  return {key, name, mean, std::max(sigma, floor * std::abs(mean)), std::sqrt(between)};
+  const auto relative = settings.model_form_relative.find(name);
+  const double form = relative == settings.model_form_relative.end() ? 0.0 : relative->second * mean;
+  const double sigma = std::sqrt(std::max(between, own) / R + form * form);
+  return {key, name, mean, std::max(sigma, settings.relative_floor * std::abs(mean)), std::sqrt(between)};
 }
 
 void addWeightRun(const analysis::Recording& rec, CaseEstimates& out) {
@@ -112,7 +114,7 @@ std::vector<Quantity> quantities(const std::vector<analysis::Recording>& recordi
   std::vector<Quantity> out;
   for (const auto& [key, estimates] : cases)
     for (const auto& name : kept)
-      if (auto it = estimates.find(name); it != estimates.end()) out.push_back(pool(key, name, it->second, settings.relative_floor));
+      if (auto it = estimates.find(name); it != estimates.end()) out.push_back(pool(key, name, it->second, settings));
   return out;
 }
 

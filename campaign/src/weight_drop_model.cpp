@@ -14,7 +14,9 @@
 // layout and, per weight, a fem::SpringRitzBasis (the modes at the first E and k_theta plus the static
 // responses to unit forces on the spring DOFs) gives the modes of every (E, k_theta) from a small
 // eigen problem and the exact static solution by the Woodbury identity. Sensor gains scale the
-// outputs only, so they change neither the reduction nor the basis.
+// outputs only, so they change neither the reduction nor the basis. An added mass on the pan rows
+// (weight_drop.added_mass_kg, tared) moves neither the load nor the static solution; its modes come
+// from those without it by Rayleigh-Ritz on the kept modes (withAddedMass), one small eigen problem.
 #include "demfem/campaign/model.hpp"
 
 #include "demfem/fem/modal.hpp"
@@ -23,11 +25,13 @@
 #include "demfem/fem/sensors.hpp"
 #include "demfem/fem/weight_drop.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <future>
 #include <map>
+#include <optional>
 #include <mutex>
 
 namespace demfem::campaign {
@@ -139,9 +143,10 @@ Eigen::VectorXd weightLoad(const fem::ReducedModel& model, const std::vector<int
   return load;
 }
 
-// The reduced model with the weight's mass lumped on the pan rows (Section 2.10.1).
+// The reduced model with the weight's mass, and the added mass already hanging there (its weight
+// tared), lumped on the pan rows (Section 2.10.1, as fem::simulateWeightDrop).
 fem::ReducedModel loadedModel(fem::ReducedModel model, const std::vector<int>& pan, const study::WeightDrop& drop) {
-  fem::addLumpedMass(model, pan, drop.mass_kg / static_cast<double>(pan.size()));
+  fem::addLumpedMass(model, pan, (drop.mass_kg + drop.added_mass_kg) / static_cast<double>(pan.size()));
   return model;
 }
 
@@ -181,22 +186,54 @@ Basis basisOf(const fem::ReducedModel& loaded, const study::Tool& tool, const fe
 
 int modeCount(const fem::ReducedModel& model) { return std::min(kModes, static_cast<int>(model.freeDofs().size()) / 2); }
 
-// Rigid clamp: the modes of the loaded reduction at E_ref (E enters by scaling, integrate()).
-Basis rigidBasis(const Reduction& reduction, const study::Tool& tool, const study::WeightDrop& drop) {
-  const std::vector<int> pan = panDofs(reduction.model, drop);
-  const fem::ReducedModel loaded = loadedModel(reduction.model, pan, drop);
-  const Eigen::VectorXd load = weightLoad(loaded, pan, drop);
-  return basisOf(loaded, tool, fem::naturalModes(loaded, modeCount(loaded)), fem::solveStatic(loaded, load), load);
+// The modes and exact static solution of one weight without the added mass (a tared mass moves
+// neither the load nor the static solution).
+struct WeightSolution {
+  fem::Modes modes;
+  fem::StaticSolution exact;
+};
+
+study::WeightDrop withoutAddedMass(study::WeightDrop drop) {
+  drop.added_mass_kg = 0;
+  return drop;
 }
 
-// Compliant clamp: the modes at the tool's E and k_theta from the weight's spring Ritz basis.
-Basis sprungBasis(const Reduction& reduction, const fem::SpringRitzBasis& ritz, const study::Tool& tool, const study::WeightDrop& drop) {
-  const std::vector<int> pan = panDofs(reduction.model, drop);
-  const fem::ReducedModel loaded = loadedModel(modelOf(reduction, tool), pan, drop);
-  const Eigen::VectorXd load = weightLoad(loaded, pan, drop);
+// Rigid clamp: `loaded` is the loaded reduction at E_ref (E enters by scaling, integrate()).
+WeightSolution rigidSolution(const fem::ReducedModel& loaded, const study::WeightDrop& drop) {
+  return {fem::naturalModes(loaded, modeCount(loaded)), fem::solveStatic(loaded, weightLoad(loaded, panDofs(loaded, drop), drop))};
+}
+
+// Compliant clamp: `loaded` at the tool's E and k_theta (modelOf), from the weight's spring Ritz basis.
+WeightSolution sprungSolution(const Reduction& reduction, const fem::ReducedModel& loaded, const fem::SpringRitzBasis& ritz,
+                              const study::Tool& tool, const study::WeightDrop& drop) {
   const double e = tool.fem.youngs_Pa / reduction.E_ref_Pa;
   const double s = *tool.constraints.clamp_rotational_stiffness_Nm_per_rad / reduction.k_ref_Nm_per_rad;
-  return basisOf(loaded, tool, ritz.modes(e, s, modeCount(loaded)), ritz.solveStatic(e, s, load), load);
+  return {ritz.modes(e, s, modeCount(loaded)), ritz.solveStatic(e, s, weightLoad(loaded, panDofs(loaded, drop), drop))};
+}
+
+// The modes with the added mass m_a on the pan rows from those without it, by Rayleigh-Ritz on the
+// kept modes Phi: V^T K V = diag(w^2), V^T M V = I + (m_a / n) Phi_pan^T Phi_pan, one eigen
+// problem of the mode count (docs/diagnosis.md, "added_mass").
+fem::Modes withAddedMass(const fem::Modes& modes, const std::vector<int>& pan, double added_mass_kg) {
+  if (added_mass_kg == 0) return modes;
+  const auto count = static_cast<Eigen::Index>(modes.frequencies_Hz.size());
+  Eigen::VectorXd omega2(count);
+  for (Eigen::Index j = 0; j < count; ++j) omega2(j) = std::pow(2 * M_PI * modes.frequencies_Hz[static_cast<std::size_t>(j)], 2);
+  const Eigen::MatrixXd at_pan = modes.shapes(pan, Eigen::all);
+  const Eigen::MatrixXd mass = Eigen::MatrixXd::Identity(count, count) + added_mass_kg / static_cast<double>(pan.size()) * at_pan.transpose() * at_pan;
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(omega2.asDiagonal()), mass);
+  fem::Modes out;
+  out.shapes = modes.shapes * eig.eigenvectors();  // M-normalized with the added mass
+  for (Eigen::Index j = 0; j < count; ++j) out.frequencies_Hz.push_back(std::sqrt(std::max(0.0, eig.eigenvalues()(j))) / (2 * M_PI));
+  return out;
+}
+
+// The basis of one weight with its added mass. `loaded` is the model without the added mass: the
+// added mass lies on free pan DOFs, so neither the sensors nor the load-cell rows of M see it; it
+// enters through the modes only.
+Basis weightBasis(const fem::ReducedModel& loaded, const WeightSolution& solution, const study::Tool& tool, const study::WeightDrop& drop) {
+  const std::vector<int> pan = panDofs(loaded, drop);
+  return basisOf(loaded, tool, withAddedMass(solution.modes, pan, drop.added_mass_kg), solution.exact, weightLoad(loaded, pan, drop));
 }
 
 // Eq (5) and (10) per mode for the step load (fem::ModalRecursion); returns the recording's columns.
@@ -230,13 +267,14 @@ analysis::Recording integrate(const Basis& b, double scale, const study::Tool& t
 struct WeightDropModel::Impl {
   OnceMap<Reduction> reductions;
   OnceMap<fem::SpringRitzBasis> ritz;  // per clamp layout and weight
-  OnceMap<Basis> bases;
+  OnceMap<WeightSolution> solutions;   // per weight (and E, k_theta with a clamp spring)
+  OnceMap<Basis> bases;                // per solution and added mass
 };
 
 WeightDropModel::WeightDropModel() : impl_(std::make_unique<Impl>()) {}
 WeightDropModel::~WeightDropModel() = default;
 
-int WeightDropModel::basesBuilt() const { return impl_->reductions.size() + impl_->ritz.size() + impl_->bases.size(); }
+int WeightDropModel::basesBuilt() const { return impl_->reductions.size() + impl_->ritz.size() + impl_->solutions.size(); }
 
 analysis::Recording WeightDropModel::run(const study::Study& study, const analysis::CaseKey& key, const std::filesystem::path&) {
   if (!study.weight_drop) throw std::invalid_argument("weight-drop model: study '" + study.name + "' has no /weight_drop");
@@ -248,17 +286,28 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
     return Reduction{fem::reduceCached(fem::buildFullModel(tool), fem::defaultReductionDirectory()), tool.fem.youngs_Pa, clamp.value_or(0.0)};
   });
   const std::string weight_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
-  std::shared_ptr<const Basis> basis;
+  std::shared_ptr<const WeightSolution> solution;
+  std::string solution_key = weight_key;
+  // The loaded model without the added mass (at the tool's E and k_theta with a clamp spring), built
+  // once per run when a solution or basis is missing.
+  std::optional<fem::ReducedModel> loaded_model;
+  const auto loaded = [&]() -> const fem::ReducedModel& {
+    if (!loaded_model)
+      loaded_model = loadedModel(clamp ? modelOf(*reduction, tool) : reduction->model, panDofs(reduction->model, drop), withoutAddedMass(drop));
+    return *loaded_model;
+  };
   if (clamp) {
     const auto ritz = impl_->ritz.get(weight_key, [&] {
-      const fem::ReducedModel loaded = loadedModel(reduction->model, panDofs(reduction->model, drop), drop);
+      const fem::ReducedModel loaded = loadedModel(reduction->model, panDofs(reduction->model, drop), withoutAddedMass(drop));
       return fem::SpringRitzBasis(loaded, modeCount(loaded));
     });
-    const std::string key_of_values = weight_key + "|" + nlohmann::json(tool.fem.youngs_Pa).dump() + "|" + nlohmann::json(*clamp).dump();
-    basis = impl_->bases.get(key_of_values, [&] { return sprungBasis(*reduction, *ritz, tool, drop); });
+    solution_key += "|" + nlohmann::json(tool.fem.youngs_Pa).dump() + "|" + nlohmann::json(*clamp).dump();
+    solution = impl_->solutions.get(solution_key, [&] { return sprungSolution(*reduction, loaded(), *ritz, tool, drop); });
   } else {
-    basis = impl_->bases.get(weight_key, [&] { return rigidBasis(*reduction, tool, drop); });
+    solution = impl_->solutions.get(solution_key, [&] { return rigidSolution(loaded(), drop); });
   }
+  const auto basis = impl_->bases.get(solution_key + "|" + nlohmann::json(drop.added_mass_kg).dump(),
+                                      [&] { return weightBasis(loaded(), *solution, tool, drop); });
   const auto steps = static_cast<long>(std::llround(drop.duration_s / study.fem.dt_s));
   const double scale = clamp ? 1.0 : tool.fem.youngs_Pa / reduction->E_ref_Pa;  // a sprung basis is at the tool's E
   analysis::Recording rec = integrate(*basis, scale, tool, study.fem.dt_s, steps);

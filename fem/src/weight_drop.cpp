@@ -74,9 +74,10 @@ WeightDropResult simulateWeightDrop(const ReducedModel& model, const study::Tool
   // Section 2.10.1: the weight as a uniform load on the pan rows (gravity along -z of the tool) ...
   Eigen::VectorXd load = Eigen::VectorXd::Zero(model.dofCount());
   for (int dof : pan_z_dofs) load(dof) = -drop.mass_kg * kStandardGravity_m_s2 / n;
-  // ... and its mass lumped on the diagonal of M in the same rows.
+  // ... and its mass lumped on the diagonal of M in the same rows, with the added mass already
+  // hanging there (its weight tared: no load).
   ReducedModel loaded = model;
-  addLumpedMass(loaded, pan_z_dofs, drop.mass_kg / n);
+  addLumpedMass(loaded, pan_z_dofs, (drop.mass_kg + drop.added_mass_kg) / n);
 
   const Sensors sensors(loaded, tool);
   WeightDropResult result;

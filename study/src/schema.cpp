@@ -553,7 +553,9 @@ const Section<WeightDrop>& weightDropSection() {
        {"pan_rows_from_tip_mm", &WeightDrop::pan_rows_from_tip_m, Need::Required, kLength, {}, always(), {},
         "keypoint rows within this distance of the tip carry the pan; < the free length"},
        {"duration_s", &WeightDrop::duration_s, Need::Required, leftOpen(0.0, 1e5), {}, always(), {},
-        "simulated time, >= `fem.dt_s`"}}};
+        "simulated time, >= `fem.dt_s`"},
+       {"added_mass_kg", &WeightDrop::added_mass_kg, Need::Optional, closedInterval(0.0, 1e4), {}, always(), {},
+        "mass on the pan rows before the weight is hung (pan, hook, sensor): on M's diagonal, its weight tared (no step load)"}}};
   return s;
 }
 

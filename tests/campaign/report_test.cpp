@@ -83,26 +83,26 @@ StagedCalibration twoStages() {
   return c;
 }
 
-CauseResult cause(std::string id, std::string description, std::string expected_signature, SignatureMatch match) {
-  CauseResult c;
-  c.id = std::move(id), c.description = std::move(description), c.expected_signature = std::move(expected_signature), c.match = std::move(match);
-  return c;
+ModelFit baselineModel() {
+  ModelFit m;
+  m.parameters = {parameter("/tools/0/fem/E_Pa", 3.69e9, 4.47e9, true, 4.06e9, 3.8e9, 1e7)};
+  m.minima = 1, m.held_out_folds = 2, m.split = "leave one case out (2 folds)";
+  m.chi2 = 2856, m.log_likelihood = -1428, m.log_occam = -5.1, m.log_evidence = -1433.1, m.probability = 0.0;
+  m.significant = 4, m.model_runs = 40, m.wall_time_s = 0.8;
+  return m;
 }
 
-CauseResult fittedCause() {
-  CauseResult c = cause("clamp_compliance", "a rotational spring at the clamp, not a rigid root",
-                        "force per weight lower, deformation larger, frequency lower", {true, "force per weight 4.1 % low, deformation 17 % high"});
-  c.fitted = true;
-  c.parameters = {parameter("/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", 0.15, 1500, true, 150, 1.52, 0.03)};
-  c.minima = 1, c.held_out = true, c.split = "leave one case out (2 folds)";
-  c.error_before_percent = 17.2, c.error_after_percent = 0.15, c.gain_percent = 99.1;
-  c.chi2 = 12.5, c.bic = 15.3, c.delta_bic = -2841.7, c.model_runs = 96, c.wall_time_s = 3.2;
-  return c;
-}
-
-CauseResult unfittedCause() {
-  return cause("sensor_gain", "a channel's gain off", "one channel's steady ratio off at every weight, frequency and damping unchanged",
-               {false, "frequency ratio 0.93 +- 0.01: changed, \"not a gain\""});
+ModelFit clampModel() {
+  ModelFit m;
+  m.causes = {"clamp_compliance"};
+  m.parameters = {parameter("/tools/0/fem/E_Pa", 3.69e9, 4.47e9, true, 4.06e9, 4.07e9, 1e7),
+                  parameter("/tools/0/constraints/clamp_rotational_stiffness_Nm_per_rad", 0.15, 1500, true, 150, 1.52, 0.03)};
+  m.minima = 1, m.held_out_folds = 2, m.split = "leave one case out (2 folds)";
+  m.error_before_percent = 17.2, m.error_after_percent = 0.15, m.noise_error_percent = 0.8, m.gain_percent = 95.3;
+  m.held_out_chi2_before = 1080, m.held_out_chi2_after = 0.39, m.chi2_gain_percent = 99.3;
+  m.chi2 = 12.5, m.log_likelihood = -6.25, m.log_occam = -8.0, m.log_evidence = -14.25, m.ln_bayes_factor = 1418.85, m.probability = 1.0;
+  m.model_runs = 96, m.wall_time_s = 3.2;
+  return m;
 }
 
 Diagnosis diagnosis() {
@@ -118,10 +118,20 @@ Diagnosis diagnosis() {
   bin.key = soilBin(40), bin.force_bias_percent = -37.5, bin.deformation_bias_percent = std::nan("");
   bin.end_rise_difference = 0.02, bin.fluctuation_ratio = 0.8, bin.spectral_slope_measured = -1.1, bin.spectral_slope_simulated = -0.9;
   d.signatures.soil_bins = {bin};
-  d.ranking = {fittedCause(), unfittedCause()};
-  d.cause = "clamp_compliance";
-  d.reason = "clamp_compliance cuts the held-out error by 99 %";
-  d.gain_percent = 99.1, d.baseline_error_percent = 17.2, d.baseline_chi2 = 2856, d.residual_count = 16, d.wall_time_s = 12;
+  d.considered = {{"clamp_compliance", "a rotational spring at the clamp, not a rigid root", "force per weight lower, deformation larger, frequency lower",
+                   {}, {true, "force per weight 4.1 % low, deformation 17 % high"}},
+                  {"force_sensor_gain", "the load cell's gain off", "the force's steady ratio off at every weight",
+                   {}, {false, "frequency ratio 0.93 +- 0.01: changed, \"not a gain\""}}};
+  d.baseline = baselineModel();
+  d.models = {clampModel()};
+  Localisation force{weight(0.125), "step_force_N", 2.45, 2.9, 0.04};
+  force.residual_percent = 18.4, force.z = 11.2, force.p_value = 4e-29, force.significant = true;
+  Localisation damping{weight(0.125), "damping_ratio", 0.012, 0.012, 0.0001};
+  d.localisation = {force, damping};
+  d.verdict = Verdict::Cause;
+  d.causes = {"clamp_compliance"};
+  d.reason = "clamp_compliance: ln B 1419 over the calibrated baseline";
+  d.gain_percent = 95.3, d.nominal_error_percent = 17.2, d.wall_time_s = 12;
   return d;
 }
 
@@ -164,45 +174,46 @@ TEST_CASE("calibrate's tables: every CSV cell equals its JSON value, the numbers
                      "Model runs 8 (cache hits 0, failed DEM runs 1), objective evaluations 8, wall time 1234.5 s."});
 }
 
-TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, unfitted causes carry null numbers", "[campaign][report]") {
+TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, the verdict and models reach both", "[campaign][report]") {
   TempDir dir("diagnose-report");
   const Diagnosis d = diagnosis();
   const DiagnosisSettings settings;
   writeStaged(dir / "out", [&](analysis::StagedOutput& out) { writeDiagnosis(d, settings, out, nullptr); });
   const nlohmann::json doc = toJson(d, settings, "extended_study.json");
-  checkCsvMatchesJson(readText(dir / "out" / "ranking.csv"), doc["ranking"]);
-  checkCsvMatchesJson(readText(dir / "out" / "parameters.csv"), nestedRows(doc["ranking"], "parameters"));
+  checkCsvMatchesJson(readText(dir / "out" / "models.csv"), doc["models"]);
+  checkCsvMatchesJson(readText(dir / "out" / "localisation.csv"), doc["localisation"]);
+  checkCsvMatchesJson(readText(dir / "out" / "parameters.csv"), nestedRows(doc["models"], "parameters"));
   checkCsvMatchesJson(readText(dir / "out" / "weight_signatures.csv"), doc["signatures"]["weight_drops"]);
   checkCsvMatchesJson(readText(dir / "out" / "soil_signatures.csv"), doc["signatures"]["soil_bins"]);
 
   CHECK(doc["verdict"] == "cause");
+  CHECK(doc["causes"] == nlohmann::json::array({"clamp_compliance"}));
   CHECK(doc["cause"] == "clamp_compliance");
-  CHECK(doc["gain_percent"].get<double>() == 99.1);
+  CHECK(doc["gain_percent"].get<double>() == 95.3);
   CHECK(doc["extended_study"] == "extended_study.json");
-  const nlohmann::json& first = doc["ranking"][0];
-  CHECK(first["id"] == "clamp_compliance");
-  CHECK(first["rank"].get<double>() == 1);
-  CHECK(first["error_before_percent"].get<double>() == 17.2);
-  CHECK(first["error_after_percent"].get<double>() == 0.15);
-  CHECK(first["unique_fit"] == true);
-  CHECK(first["evidence"] == "force per weight 4.1 % low, deformation 17 % high");
-  CHECK(first["parameters"][0]["value"].get<double>() == 1.52);
-  CHECK(first["parameters"][0]["std_dev"].get<double>() == 0.03);
-  CHECK(first["parameters"][0]["identified"] == true);
-  const nlohmann::json& second = doc["ranking"][1];
-  CHECK(second["rank"].is_null());
-  CHECK(second["fitted"] == false);
-  CHECK(second["error_after_percent"].is_null());
-  CHECK(second["parameters"].empty());
-  CHECK(second["evidence"] == "frequency ratio 0.93 +- 0.01: changed, \"not a gain\"");
+  const nlohmann::json& baseline = doc["models"][0];
+  CHECK(baseline["id"] == "baseline");
+  CHECK(baseline["causes"].empty());
+  const nlohmann::json& clamp = doc["models"][1];
+  CHECK(clamp["id"] == "clamp_compliance");
+  CHECK(clamp["probability"].get<double>() == 1.0);
+  CHECK(clamp["log_evidence"].get<double>() == -14.25);
+  CHECK(clamp["error_before_percent"].get<double>() == 17.2);
+  CHECK(clamp["error_after_percent"].get<double>() == 0.15);
+  CHECK(clamp["parameters"][1]["value"].get<double>() == 1.52);
+  CHECK(clamp["parameters"][1]["std_dev"].get<double>() == 0.03);
+  CHECK(doc["localisation"][0]["z"].get<double>() == 11.2);
+  CHECK(doc["localisation"][0]["significant"] == true);
+  CHECK(doc["localisation"][1]["significant"] == false);
+  CHECK(doc["considered"][1]["evidence"] == "frequency ratio 0.93 +- 0.01: changed, \"not a gain\"");
   CHECK(doc["signatures"]["weight_drops"][1]["force_ratio"].get<double>() == 0.961);
-  CHECK(doc["signatures"]["weight_drops"][1]["force_ratio_std_error"].get<double>() == 0.003);
   CHECK(doc["signatures"]["soil_bins"][0]["deformation_bias_percent"].is_null());
 
   const std::string md = readText(dir / "out" / "report.md");
-  checkContains(md, {"| 1 | clamp_compliance | clamp_rotational_stiffness_Nm_per_rad = 1.52 +- 0.03 | yes | 17.2 | 0.15 | 99.1 | "
-                      "-2842 | leave one case out (2 folds) |",
-                     "| - | sensor_gain | not fitted: signature absent |  |",
+  CHECK(md.find("# Diagnosis\n\n**Cause: `clamp_compliance`**") == 0);  // the verdict first
+  checkContains(md, {"| PMMA, 0.125 kg weight | step_force_N | 18.4 | 11.2 | **yes** |",
+                     "| `clamp_compliance` | 1 | 1.42e+03 | 0 | 17.2 -> 0.15 | 95.3 | 1.08e+03 -> 0.39 | E_Pa = 4.07e+09 +- 1e+07; "
+                     "clamp_rotational_stiffness_Nm_per_rad = 1.52 +- 0.03 | leave one case out (2 folds) |",
                      "| 0.125 kg | 0.959 +- 0.004 | 1.17 +- 0.01 | 4.39 / 4.58 | 0.93 +- 0.002 | 0.0011 +- 0.0004 |",
                      "| 40 mm | -37.5 | - | 0.02 | 0.8 | -1.1 / -0.9 |"});
 }

@@ -18,8 +18,9 @@ struct Difference {
 };
 
 Difference compareAt(campaign::WeightDropModel& model, double E_Pa, double alpha_s, double mass_kg,
-                     const nlohmann::ordered_json& extension = {}) {
+                     const nlohmann::ordered_json& extension = {}, double added_mass_kg = 0) {
   nlohmann::ordered_json json = campaign::test::fixtureStudyJson();
+  json["weight_drop"]["added_mass_kg"] = added_mass_kg;
   json["tools"][0]["fem"]["E_Pa"] = E_Pa;
   json["tools"][0]["fem"]["alpha_s"] = alpha_s;
   if (!extension.is_null()) json["tools"][0].merge_patch(extension);
@@ -72,4 +73,16 @@ TEST_CASE("the modal model reproduces the direct integration with a compliant cl
   CHECK(a.deformation < 2e-3);
   CHECK(b.force < 2e-3);
   CHECK(b.deformation < 2e-3);
+}
+
+TEST_CASE("the modal model with an added mass on the pan (Ritz on the kept modes) reproduces the direct integration", "[campaign]") {
+  campaign::WeightDropModel model;
+  const Difference light = compareAt(model, 4.06e9, 5.5e-4, 0.05, {}, 0.01);
+  const Difference heavy = compareAt(model, 4.06e9, 5.5e-4, 0.05, {}, 0.05);  // as heavy as the weight
+  const Difference sprung = compareAt(model, 4.06e9, 5.5e-4, 0.05, {{"constraints", {{"clamp_rotational_stiffness_Nm_per_rad", 0.5}}}}, 0.03);
+  CHECK(model.basesBuilt() == 5);  // two reductions (rigid, sprung), one weight's modes each, one spring Ritz basis
+  for (const Difference& d : {light, heavy, sprung}) {
+    CHECK(d.force < 2e-3);
+    CHECK(d.deformation < 2e-3);
+  }
 }

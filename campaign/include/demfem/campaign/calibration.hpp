@@ -131,6 +131,9 @@ struct CalibrationResult {
   std::vector<Residual> residuals;          // at the fit
   double initial_chi2 = 0, chi2 = 0;
   std::vector<Minimum> minima;              // distinct minima within noise_chi2 (>= 1: the best first)
+  // Eigenvalues of J^T J at the fit (J: d residual.normalized / dx in optimiser coordinates), i.e.
+  // the Gauss-Newton Hessian of -ln L = chi2 / 2: the Laplace evidence's curvature (diagnose.hpp).
+  std::vector<double> curvature_eigenvalues;
   int evaluations = 0;                      // objective evaluations
   int model_runs = 0;                       // runs computed (not found in the cache)
   int cache_hits = 0;

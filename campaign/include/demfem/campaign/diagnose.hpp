@@ -1,48 +1,43 @@
-// demfem campaign: `demfem diagnose`: what the simulation gets wrong, the most likely cause, the
-// model extended by it and the measured gain on data not used to fit it (docs/diagnosis.md).
+// demfem campaign: `demfem diagnose`: what the simulation gets wrong, the most likely cause(s), the
+// model extended by them and the measured gain on data not used to fit it (docs/diagnosis.md).
 //
 // Procedure (diagnose()):
-//  1. Baseline: the study as it is predicts every case of the recordings (campaign::predict); the
-//     comparison (analysis::compare) gives the signatures (analysis/signatures.hpp).
-//  2. Candidates: the catalogue's causes of the recordings' domains (calibration weights, soil-bin
-//     runs), or those named in settings.causes. A cause whose signature is absent (Cause::match) is
-//     listed with its evidence but not fitted.
-//  3. Each plausible cause: its extension (Cause::extend) fitted with campaign::calibrate on every
-//     case but one and used to predict the held-out case, for each case in turn (leave one case
-//     out; needs two or more cases). If a fold leaves a parameter unidentified, held-out prediction
-//     is impossible: this is said (`split`) and the cause is ranked on all cases (in-sample).
-//     Finally the extension is fitted on all cases (the values reported, with their standard
-//     deviations and identification, and the extended study). Every fit, and every error and BIC
-//     of the cause below, uses the quantities of its signature (Cause::judged_on) only.
-//  4. Errors: a case's error is the root mean square over its quantities (objective.hpp: steady
-//     force and deformation, frequency, damping ratio; window means and spreads) of the relative
-//     difference 100 (sim - meas) / meas, in percent; a set of cases: the RMS over all their
-//     quantities. Held-out error before = the baseline's on the held-out cases, after = the
-//     extended model's from the folds. Noise error: the error a correct model shows from the
-//     scatter alone, the RMS over the same quantities of 100 sigma_w / |measured| with sigma_w the
-//     widened sigma of step 5; an error after below it is not resolved, so the gain is
-//     100 (before - max(after, noise)) / before.
-//  5. Information criterion: BIC = chi2 + k ln n with chi2 of the fit on all cases (objective.hpp:
-//     residuals normalised by the measured scatter, so chi2 is -2 ln L up to a constant), k the
-//     extension's parameters, n the residuals; delta_bic = BIC - chi2 of the baseline (k = 0).
-//     Soil-bin cases: a DEM run is one random packing, so the model has a seed scatter of its own.
-//     The baseline also runs at settings.scatter_seeds deposition seeds (the study's and the next
-//     ones); per case and quantity their standard deviation s_model (seed_scatter) widens the
-//     residuals' sigma of the BIC to sqrt(sigma^2 + s_model^2 / M), M the fits' model seeds
-//     (calibration.model_seeds): a fit that only absorbs the packing of the seeds it runs earns no
-//     evidence.
-//  6. Ranking: by held-out error after (ascending; in-sample for causes ranked on all cases), ties by
-//     delta_bic. The first cause is named when all hold: the baseline error on all cases is at least
-//     min_error_percent (below it the model already agrees with the recordings as well as two
-//     independent correct models of the tool agree with each other, docs/diagnosis.md), its gain
-//     (step 4) is at least min_gain_percent, delta_bic <= -min_delta_bic, and its error after is a
-//     prediction of at least min_held_out_folds held-out cases (an in-sample fit, or the prediction
-//     of one case, is ranked but never named: two layer frictions fitted to two depths' means
-//     predict a third depth's by chance as often as by cause, docs/diagnosis.md).
-//     Otherwise the verdict is "no significant discrepancy" with the reason.
+//  1. Nominal prediction: the study as given predicts every case (campaign::predict); the comparison
+//     (analysis::compare) gives the signatures (analysis/signatures.hpp), which order the work and
+//     are reported as evidence but never keep a cause from being fitted. Soil-bin cases: the model's
+//     seed scatter s_model per case and quantity from settings.scatter_seeds deposition seeds.
+//  2. Calibrated baseline: the study's nominal uncertain parameters (settings.baseline_fit, else
+//     baselineParameters() of the recordings' domain) fitted with campaign::calibrate on all cases
+//     and, leaving one case out, on every other case to predict the one left out.
+//  3. Test: each residual of the calibrated baseline (fit on all cases) as z = (sim - meas) / sigma,
+//     sigma^2 = sigma_meas^2 + s_model^2 / M + (modelFormPercent / 100 meas)^2 (objective.hpp;
+//     M the fits' model seeds), two-sided p-values, Holm's step-down at the family-wise level
+//     settings.significance_level over all quantities of all cases. None significant: verdict
+//     "no significant discrepancy". The per-quantity and per-case residuals are the localisation.
+//  4. Models: every cause of the domains (or settings.causes) fitted together with the baseline's
+//     parameters (a cause's own range replaces the baseline's for the same pointer), on all cases and
+//     per fold as in step 2. When the best single cause (by evidence) still leaves a significant
+//     residual, each of the two best single causes paired with every other cause (pairs whose
+//     parameters one cause already holds are skipped). Each model's Laplace evidence:
+//     ln Z = -chi2 / 2 + sum over the eigen directions of J^T J of min(0, ln sqrt(2 pi / lambda)),
+//     the priors uniform in the optimiser coordinates (uniform or log-uniform over each range,
+//     parameters.hpp), up to a constant common to all models; posterior probabilities
+//     exp(ln Z) / sum exp(ln Z) over the baseline and every model fitted (equal prior odds).
+//  5. Held-out benefit: held-out error before (the calibrated baseline's folds) and after (the
+//     model's folds) over the folds that identify the model; noise error the RMS of
+//     100 sigma / meas; gain = 100 (before - max(after, noise)) / before. The same in chi2 (step 3's
+//     sigma, so a quantity with a wide model-form tolerance does not mask the others): chi2 gain =
+//     100 (before - max(after, n)) / before, n the held-out residuals.
+//  6. Verdict: a model is named (verdict "cause", its one or two causes) when ln B = ln Z - ln Z_baseline
+//     >= settings.min_ln_bayes_factor, none of its residuals is significant by step 3's test, and,
+//     when a split can identify it, its chi2 gain is at least settings.min_gain_percent over at least
+//     settings.min_held_out_folds folds (a model no split can identify, e.g. two damping terms from
+//     one weight, is judged on its evidence and the report says so); of several, the most probable.
+//     None: "unexplained discrepancy", naming the significant quantities, cases and sizes.
+// - Errors are RMS over quantities of 100 (sim - meas) / meas, in percent (errorPercent).
 // - Every model run goes through the calibration's run cache (options.cache_dir).
 // - Throws ArgumentError for unusable input (no candidate cause, a named cause unknown, a case the
-//   study cannot run), campaign::Interrupted on a stop request.
+//   study cannot run, no baseline parameter), campaign::Interrupted on a stop request.
 #pragma once
 
 #include "demfem/analysis/plot.hpp"
@@ -55,62 +50,101 @@
 #include <nlohmann/json.hpp>
 
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace demfem::campaign {
 
-// The calibration settings of a diagnosis: one start (each cause fits one or two smooth
-// parameters), at most 60 evaluations, tolerance 1e-3 of the bounds (well inside the fits' scatter).
+// The calibration settings of a diagnosis: one start, at most 200 evaluations (a model fits the
+// baseline's two parameters and up to four of its causes, in a valley as narrow as the model-form
+// tolerance), tolerance 1e-4 of the bounds.
 inline CalibrationOptions diagnosisCalibration() {
   CalibrationOptions o;
   o.starts = 1;
-  o.max_evaluations = 60;
-  o.x_tolerance = 1e-3;
+  o.max_evaluations = 200;
+  o.x_tolerance = 1e-4;
   return o;
 }
+
+// The verdict of a diagnosis (JSON `verdict`: verdictText()).
+enum class Verdict { NoSignificantDiscrepancy, Cause, UnexplainedDiscrepancy };
+std::string verdictText(Verdict verdict);
 
 struct DiagnosisSettings {
   CalibrationOptions calibration = diagnosisCalibration();
   analysis::SignatureSettings signatures;
   SignatureTolerance tolerance;
-  std::vector<std::string> causes;  // empty: every cause of the recordings' domains
-  double min_error_percent = 5.0;
-  double min_gain_percent = 50.0;
-  double min_delta_bic = 10.0;
-  int min_held_out_folds = 2;  // held-out cases the named cause must predict
+  std::vector<std::string> causes;           // empty: every cause of the recordings' domains
+  std::vector<ParameterSpec> baseline_fit;   // empty: baselineParameters() of the recordings' domain
+  // Model-form tolerance, percent of each quantity (key: quantity name, "" every other one): what
+  // two correct models of one tool differ by, the narrow test tool's plate model against the
+  // independent beam after calibration (docs/diagnosis.md, "Model-form tolerance").
+  std::map<std::string, double> model_form_percent{{"", 0.3}, {"step_force_N", 1.5}};
+  double significance_level = 0.01;          // family-wise, Holm over every residual
+  double min_ln_bayes_factor = 2.3;          // Jeffreys: B >= 10, "strong"
+  double min_gain_percent = 10.0;            // held-out chi2 cut a named model must reach (step 5)
+  int min_held_out_folds = 2;                // when a split identifies it: held-out cases it must predict
+  bool pairs = true;                         // try two causes at once (step 4)
   int scatter_seeds = 3;  // soil-bin cases: deposition seeds of the baseline's seed scatter (1: none)
   std::function<void(const std::string&)> on_stage;  // "fitting clamp_compliance, fold 2/2", for progress
 };
 
-struct CauseResult {
+// One model fitted: the calibrated baseline (no cause), one cause, or a pair.
+struct ModelFit {
+  std::vector<std::string> causes;           // empty: the calibrated baseline
+  std::vector<FittedParameter> parameters;   // the fit on all cases (the baseline's and the causes')
+  int minima = 0;                            // distinct minima within the noise (1 = unique fit)
+  int held_out_folds = 0;                    // folds that identified the model and predicted their case
+  std::vector<analysis::CaseKey> held_out_cases;
+  std::vector<Residual> held_out;            // the folds' predictions
+  std::string split;                         // how the held-out error was obtained
+  double error_before_percent = 0.0;         // held-out cases: the calibrated baseline's folds (all cases without folds)
+  double error_after_percent = 0.0;          // the same cases, this model's folds (all cases: its fit)
+  double noise_error_percent = 0.0;          // the same cases, RMS of 100 sigma / meas (step 5)
+  double gain_percent = 0.0;                 // 100 (before - max(after, noise)) / before
+  // The same cases in step 3's sigma: chi2 before and after, and the gain the verdict asks for,
+  // 100 (before - max(after, n)) / before with n the residuals (a correct model's expected chi2).
+  double held_out_chi2_before = 0.0, held_out_chi2_after = 0.0, chi2_gain_percent = 0.0;
+  double chi2 = 0.0;                         // fit on all cases, sigma of step 3
+  double log_likelihood = 0.0;               // -chi2 / 2
+  double log_occam = 0.0;                    // the Gaussian volume in the prior box, ln (<= 0)
+  double log_evidence = 0.0;                 // ln Z (step 4)
+  double ln_bayes_factor = 0.0;              // ln Z - ln Z of the calibrated baseline
+  double probability = 0.0;                  // posterior over the baseline and every model fitted
+  int significant = 0;                       // residuals of the fit on all cases significant by step 3
+  int model_runs = 0;
+  double wall_time_s = 0.0;
+  nlohmann::ordered_json extended_study;     // fitted on all cases
+  std::vector<Residual> residuals;           // of the fit on all cases
+  std::vector<analysis::Recording> runs;     // its runs (fit on all cases)
+  std::string id() const;                    // "baseline", "young_modulus", "young_modulus+force_sensor_gain"
+  bool heldOut() const { return held_out_folds > 0; }
+};
+
+// A cause of the catalogue considered, with its signature's evidence (step 1).
+struct CauseEvidence {
   std::string id;
   std::string description;
   std::string expected_signature;
   std::vector<std::string> judged_on;        // Cause::judged_on (empty: every quantity of its domain)
   SignatureMatch match;
-  bool fitted = false;                       // false: not plausible, not fitted
-  std::vector<FittedParameter> parameters;   // the fit on all cases
-  int minima = 0;                            // distinct minima within the noise (1 = unique fit)
-  bool held_out = false;                     // false: ranked on all cases (see split)
-  int held_out_folds = 0;                    // folds that identified the extension and predicted their case
-  std::string split;                         // how the error after was obtained
-  double error_before_percent = 0.0;         // held-out cases (or all cases), baseline
-  double error_after_percent = 0.0;          // the same cases, extended model
-  double noise_error_percent = 0.0;          // the same cases, a correct model's error from the scatter alone (step 4)
-  double gain_percent = 0.0;                 // 100 (before - max(after, noise)) / before
-  double chi2 = 0.0, bic = 0.0, delta_bic = 0.0;
-  int model_runs = 0;
-  double wall_time_s = 0.0;
-  nlohmann::ordered_json extended_study;     // fitted on all cases
-  std::vector<Residual> residuals;           // of the fit on all cases
-  std::vector<analysis::Recording> runs;     // the extended model's runs (fit on all cases)
 };
 
-// The model's own seed scatter of one quantity of one case (step 5 of the header comment): the
-// sample standard deviation of the baseline's value over `seeds` deposition seeds, in the quantity's
-// unit.
+// One residual of the calibrated baseline (step 3): where the discrepancy lives.
+struct Localisation {
+  analysis::CaseKey key;
+  std::string quantity;
+  double measured = 0.0, simulated = 0.0, sigma = 0.0;
+  double residual_percent = 0.0;  // 100 (sim - meas) / meas
+  double z = 0.0;                 // (sim - meas) / sigma
+  double p_value = 1.0;           // two-sided
+  bool significant = false;       // by Holm's step-down at the family-wise level
+};
+
+// The model's own seed scatter of one quantity of one case (step 1): the sample standard deviation
+// of the study's value over `seeds` deposition seeds, in the quantity's unit.
 struct SeedScatter {
   analysis::CaseKey key;
   std::string quantity;
@@ -118,32 +152,36 @@ struct SeedScatter {
   int seeds = 0;
 };
 
-// A quantity no candidate cause is judged on (Cause::judged_on), with the baseline's error on it:
-// what the simulation gets wrong that the catalogue does not explain (the soil runs' window spreads).
+// A quantity no candidate cause is judged on (Cause::judged_on), with the study as given's
+// error on it: what the simulation gets wrong that the catalogue does not consider (soil spreads).
 struct UnjudgedQuantity {
   std::string quantity;
-  double baseline_error_percent = 0.0;  // RMS over the cases whose baseline ran (step 4)
+  double baseline_error_percent = 0.0;  // the study as given: RMS over the cases whose nominal run ran
 };
 
 struct Diagnosis {
   analysis::Signatures signatures;
-  std::vector<Residual> baseline_residuals;
-  std::vector<analysis::Recording> baseline_runs;
+  std::vector<Residual> nominal_residuals;  // the study as given
+  std::vector<analysis::Recording> nominal_runs;
   std::vector<analysis::Recording> measured;
-  double baseline_error_percent = 0.0;      // all cases whose baseline runs ran
-  std::vector<analysis::CaseKey> failed_baseline_cases;  // a baseline run failed: left out of every error and BIC
-  double baseline_chi2 = 0.0;               // residuals normalised by the measured scatter only
+  double nominal_error_percent = 0.0;       // all cases whose nominal runs ran
+  std::vector<analysis::CaseKey> failed_baseline_cases;  // a nominal run failed: left out of every error and test
   std::vector<SeedScatter> seed_scatter;     // soil-bin quantities (empty without soil cases or scatter_seeds < 2)
-  double noise_error_percent = 0.0;          // all cases whose baseline ran: a correct model's error from the scatter alone (step 4)
-  int residual_count = 0;
-  std::vector<CauseResult> ranking;         // fitted causes ranked first, then the others
-  std::vector<UnjudgedQuantity> unjudged;   // quantities no candidate cause is judged on
-  std::optional<std::string> cause;         // the named cause
-  std::string reason;                       // why it was named, or why none was
-  double gain_percent = 0.0;                // the named cause's; 0 without one
-  nlohmann::ordered_json extended_study;    // the named cause's fitted study, else the study itself
+  std::vector<CauseEvidence> considered;     // the candidate causes, in catalogue order
+  ModelFit baseline;                         // the calibrated baseline
+  std::vector<Localisation> localisation;    // its residuals tested (step 3)
+  std::vector<ModelFit> models;              // causes and pairs, most probable first
+  std::vector<UnjudgedQuantity> unjudged;
+  Verdict verdict = Verdict::NoSignificantDiscrepancy;
+  std::vector<std::string> causes;           // the named model's causes (verdict Cause)
+  std::string reason;                        // one sentence: why
+  double gain_percent = 0.0;                 // the named model's; 0 without one
+  nlohmann::ordered_json extended_study;     // the named model's fitted study, else the calibrated baseline's
   double wall_time_s = 0.0;
 };
+
+// The model-form tolerance of `quantity` (DiagnosisSettings::model_form_percent), percent.
+double modelFormPercent(const DiagnosisSettings& settings, const std::string& quantity);
 
 // Relative error of residuals (step 4 of the header comment), percent.
 double errorPercent(const std::vector<Residual>& residuals);
@@ -151,16 +189,16 @@ double errorPercent(const std::vector<Residual>& residuals);
 Diagnosis diagnose(const nlohmann::ordered_json& study, const std::string& origin, const std::vector<analysis::Recording>& recordings,
                    Model& model, const DiagnosisSettings& settings);
 
-// `verdict`, `cause`, `reason`, `ranking` (one object per row of ranking.csv: rank, id, held-out
-// error before/after in percent, gain, BIC, evidence, ...; null numbers for a cause not fitted;
-// each with its `parameters`, the rows of parameters.csv of that cause: value, std_dev,
-// identification), `gain_percent`, `signatures` (analysis::toJson), `extended_study` (the path
-// given), thresholds and wall time (docs/diagnosis.md lists the keys).
+// `verdict`, `causes`, `cause` (the first or null), `reason`, `localisation` (rows of
+// localisation.csv), `models` (rows of models.csv, the calibrated baseline first: ids, log_evidence,
+// probability, held-out errors, gain, each with its `parameters`), `baseline`, `signatures`,
+// settings and wall time (docs/diagnosis.md lists the keys).
 nlohmann::json toJson(const Diagnosis& diagnosis, const DiagnosisSettings& settings, const std::string& extended_study_path);
 
-// extended_study.json, report.md (signatures, ranking, the gain, before/after plots unless renderer
-// is null), the tables weight_signatures.csv, soil_signatures.csv, ranking.csv and parameters.csv
-// (each cell equal to the JSON's value of its column) through `out` (committed by the caller).
+// extended_study.json, report.md (the verdict in one sentence, localisation, model probabilities,
+// before/after plots unless renderer is null, the extended study), the tables localisation.csv,
+// models.csv, parameters.csv, weight_signatures.csv and soil_signatures.csv (each cell equal to the
+// JSON's value of its column) through `out` (committed by the caller).
 void writeDiagnosis(const Diagnosis& diagnosis, const DiagnosisSettings& settings, analysis::StagedOutput& out,
                     const analysis::GnuplotRenderer* renderer);
 

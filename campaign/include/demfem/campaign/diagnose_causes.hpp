@@ -60,9 +60,20 @@ struct Cause {
   std::function<Extension(const nlohmann::ordered_json& study, const std::vector<double>& depths_mm)> extend;
 };
 
-// Every cause, in a fixed order: young_modulus, clamp_compliance, mass_damping, sensor_gain
-// (calibration weights); layered_soil, cohesion, end_wall (soil-bin runs).
+// Every cause, in a fixed order: young_modulus, clamp_compliance, mass_damping, damping_form,
+// added_mass, force_sensor_gain, deformation_sensor_gain (calibration weights); layered_soil,
+// cohesion, end_wall, tool_friction (soil-bin runs).
 const std::vector<Cause>& causeCatalogue();
+
+// The calibrated baseline's parameters of one domain (docs/diagnosis.md, "Calibrated baseline"): the
+// study's nominal uncertain parameters within their nominal uncertainty. Calibration weights: E_Pa
+// of the deformable tool within 1/1.1-1.1 x the study's (log: a sheet's modulus known to 10 %) and
+// alpha_s within 0.5-2 x (log; 1e-6-1e-2 s when the study's is 0). Soil-bin runs: the static and
+// rolling friction of the self pair of the deepest layer each depth reaches (the parameters of
+// layeredSoilPreset, calibration.hpp: for a single-layer study, that layer's two frictions).
+// Throws ArgumentError when the study has none of them.
+std::vector<ParameterSpec> baselineParameters(const nlohmann::ordered_json& study, const std::string& origin,
+                                              const std::vector<analysis::Recording>& recordings, analysis::CaseKind domain);
 
 // The entry of `id`; throws ArgumentError listing the ids.
 const Cause& findCause(const std::string& id);

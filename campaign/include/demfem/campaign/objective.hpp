@@ -16,7 +16,9 @@
 //   repeat's window samples, N_window their number;
 // - window spreads: max(s_between, sd / sqrt(2 (N_window - 1))) / sqrt(R);
 // and never below `relative_floor` |value| (a noise-free recording would otherwise get an infinite
-// weight; the floor is stated in the report).
+// weight; the floor is stated in the report). A stated model-form tolerance widens it to
+// sqrt(sigma^2 + (m value)^2), m the quantity's entry of `model_form_relative` (none: 0; a diagnosis
+// sets it, docs/diagnosis.md).
 // Residual r = (simulated - measured) / sigma_measured; chi2 = sum r^2 is what the fit minimises.
 #pragma once
 
@@ -25,6 +27,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -33,6 +36,7 @@ namespace demfem::campaign {
 struct ObjectiveSettings {
   analysis::AnalysisSettings analysis;  // Section 2.3 window and landmarks for soil-bin runs
   double relative_floor = 1e-3;         // sigma >= relative_floor * |value|
+  std::map<std::string, double> model_form_relative;  // per quantity name: sigma widened by it * |value| in quadrature
   bool soil_deformation = true;         // soil-bin deformation quantities (false for a rigid tool)
   // Empty: every quantity above. Otherwise only these names (a diagnosis fits and judges a cause on
   // the quantities its signature moves, docs/diagnosis.md); a name that is not a quantity above is

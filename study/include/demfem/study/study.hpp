@@ -210,6 +210,9 @@ struct WeightDrop {
   double mass_kg = 1.0;
   double pan_rows_from_tip_m = 0.010;  // keypoint rows within this distance of the tip carry the pan
   double duration_s = 3.0;
+  // Mass on the pan rows present before the weight is hung (pan, hook, a sensor): on M's diagonal,
+  // its weight tared with the tool's, so it is not part of the step load (docs/study-file.md).
+  double added_mass_kg = 0.0;
   bool operator==(const WeightDrop&) const = default;
 };
 
