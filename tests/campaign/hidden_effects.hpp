@@ -454,7 +454,8 @@ inline void writeDrawRecordings(const Draw& d, const std::filesystem::path& dir)
     const auto responses = hiddenResponses(h, daq);
     for (std::size_t w = 0; w < responses.size(); ++w) {
       const double m = recoveryMasses_kg()[w];
-      const auto name = "w" + std::to_string(static_cast<int>(std::lround(m * 1000))) + "_r" + std::to_string(repeat) + ".csv";
+      char name[40];
+      std::snprintf(name, sizeof name, "w%ld_r%d.csv", std::lround(m * 1000), repeat);
       analysis::writeSyntheticRecording(daqRecording(responses[w], m, daq, repeat), dir / name);
     }
   }
