@@ -2,7 +2,7 @@
 // seed --seed (tests/campaign/hidden_effects.hpp: single catalogue effects, pairs, effects outside
 // the catalogue and null cases in weight drops of the narrow PMMA tool, from an independent beam
 // model), each diagnosed by the `demfem diagnose` executable as a child process, --jobs at a time
-// (one thread each). Prints the matrix per catalogue entry, the targets of issue 52 with their
+// (one thread each). Prints the matrix per catalogue entry, the acceptance targets with their
 // one-sided 95 % Clopper-Pearson bounds, and every draw; --json writes the same.
 //
 // Resumable: every finished draw is appended to --log (JSON lines: seed, index, verdict, causes,

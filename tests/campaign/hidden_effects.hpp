@@ -300,8 +300,6 @@ class Detectability {
     return z;
   }
 
-  // Standard errors of (A, f_d, zeta) per weight and channel (weight-major, force first).
-  Eigen::Vector3d stdError(std::size_t weight, int channel) const { return channels_[2 * weight + static_cast<std::size_t>(channel)].std_error; }
 
   double largestZ(const std::vector<Effect>& effects) const { return largestZ(hiddenResponses(hiddenTruth(effects), daq_)); }
 

@@ -25,7 +25,6 @@
 #include <functional>
 #include <map>
 #include <mutex>
-#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
