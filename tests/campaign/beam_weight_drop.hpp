@@ -1,22 +1,32 @@
 // Test fixture: calibration-weight recordings from a model INDEPENDENT of the project's FEM code: an
 // Euler-Bernoulli beam of the tool's free part (Hermite cubic elements, consistent mass, its own
 // eigen solution and an exact modal step response), with the effects a diagnosis must find built
-// in: a rotational spring at the clamp edge, Rayleigh damping C = alpha K + beta M, and gains on the
-// two channels. Written as a raw DAQ recording: t, force, deformation in DAQ units, quantised to
-// whole units, Gaussian noise, a resting baseline before the weight is hung.
+// in: a rotational spring at the clamp edge, Rayleigh damping C = alpha K + beta M (Eq 4: alpha_s
+// multiplies K, beta_per_s multiplies M), an unmodelled mass at the tip, and a gain and an offset
+// on each of the two channels. Written as a raw DAQ recording: t, force, deformation in DAQ units,
+// quantised to whole units, Gaussian noise and an optional mains hum, a resting baseline before the
+// weight is hung.
 //
 // Beam: x from the clamp's lower edge (x = 0) to the tip (x = free_length). w(0) = 0; the root
 // rotation is fixed (rigid clamp) or held by the spring k_theta; the load cell holds w(prop) = 0 and
 // reads the support force. The pan: the weight m g in equal parts on the nodes within pan_length of
-// the tip, its mass lumped there. Deformation: w at the sensor, interpolated with the element's
-// shape functions. The tool's own weight is tared, so the readings are the response to the weight.
+// the tip, its mass lumped there. The unmodelled tip mass is lumped on the same nodes but carries
+// no load: it hangs on the tool before the weight (e.g. a hook), so the tare removes its weight and
+// only its inertia remains. The weight's shares on the pan nodes can be moved linearly so that their
+// centroid moves toward the tip (a weight hung a little off the pan's centre). Deformation: w at the sensor, interpolated with the element's shape
+// functions. The tool's own weight is tared, so the readings are the response to the weight; a
+// channel's offset is added to its reading from the moment the weight is hung (a zero shift of
+// the loaded sensor, the same at every weight), its gain multiplies the response.
 #pragma once
 
 #include "demfem/analysis/synthetic.hpp"
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <vector>
@@ -29,24 +39,56 @@ struct BeamTool {
   double prop_from_edge_m = 0.025;   // load cell
   double sensor_from_edge_m = 0.053; // deformation sensor
   double pan_length_m = 0.010;       // nodes within this distance of the tip carry the weight
+  double load_shift_m = 0.0;         // the weight's centroid moved this far toward the tip
   double element_m = 0.005;
   double alpha_s = 0.00055, beta_per_s = 0.0;
   std::optional<double> k_theta_Nm_per_rad;  // none: rigid clamp
+  double tip_mass_kg = 0.0;                  // unmodelled: inertia on the pan nodes, no load
   double force_gain = 1.0, deformation_gain = 1.0;
+  double force_offset_N = 0.0, deformation_offset_mm = 0.0;
 };
 
 struct Daq {
   double sample_rate_Hz = 1000, duration_s = 3.0, drop_time_s = 0.2;
   double force_factor_N_per_unit = 0.002, deformation_factor_mm_per_unit = 0.0002;
   double force_noise_N = 0.002, deformation_noise_mm = 0.0002;
+  double force_hum_N = 0.0, deformation_hum_mm = 0.0, hum_Hz = 50;  // mains hum amplitude, random phase
   std::uint64_t seed = 1;
+
+  // Sample times of a recording, and the time since the weight was hung at each (0 before).
+  std::vector<double> times_s() const {
+    std::vector<double> t;
+    const auto samples = static_cast<long>(std::lround(duration_s * sample_rate_Hz));
+    for (long i = 0; i < samples; ++i) t.push_back(static_cast<double>(i) / sample_rate_Hz);
+    return t;
+  }
+  std::vector<double> timesAfterDrop_s() const {
+    std::vector<double> after;
+    for (double t : times_s()) after.push_back(std::max(0.0, t - drop_time_s));
+    return after;
+  }
 };
 
 struct BeamResponse {
   std::vector<double> t_s, force_N, deformation_mm;  // true channels (gains applied), no noise
 };
 
-inline BeamResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std::vector<double>& t_after_drop) {
+// The beam with one weight hung: its free DOFs' modes (M-normalised), the modal load, and the rows
+// that read the two channels.
+struct BeamModes {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd omega2, modal_force;
+  Eigen::RowVectorXd sensor, Kp, Mp;  // deformation row; the load cell's rows of K and M
+  double alpha_s = 0, beta_per_s = 0;
+
+  // Damping ratio of mode j (Eq 4, modal): zeta = alpha omega / 2 + beta / (2 omega).
+  double zeta(Eigen::Index j) const {
+    const double w = std::sqrt(omega2(j));
+    return alpha_s * w / 2 + beta_per_s / (2 * w);
+  }
+};
+
+inline BeamModes beamModes(const BeamTool& b, double mass_kg) {
   const int elements = static_cast<int>(std::lround(b.free_length_m / b.element_m));
   const double h = b.free_length_m / elements;
   const int nodes = elements + 1, n = 2 * nodes;  // DOFs (w, theta) per node, node 0 at the clamp edge
@@ -65,16 +107,25 @@ inline BeamResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std:
   std::vector<int> pan;
   for (int i = 0; i < nodes; ++i)
     if (b.free_length_m - i * h <= b.pan_length_m + 1e-9) pan.push_back(i);
-  for (int i : pan) F(2 * i) = mass_kg * 9.80665 / pan.size(), M(2 * i, 2 * i) += mass_kg / pan.size();
+  // Equal shares, moved linearly along the pan so that their centroid moves by load_shift_m.
+  double mean_x = 0, spread = 0;
+  for (int i : pan) mean_x += i * h / static_cast<double>(pan.size());
+  for (int i : pan) spread += std::pow(i * h - mean_x, 2);
+  for (int i : pan) {
+    const double share = 1.0 / static_cast<double>(pan.size()) + (spread > 0 ? b.load_shift_m * (i * h - mean_x) / spread : 0.0);
+    F(2 * i) = mass_kg * 9.80665 * share, M(2 * i, 2 * i) += (mass_kg + b.tip_mass_kg) * share;
+  }
   std::vector<int> fixed{0, 2 * prop}, free;
   if (!b.k_theta_Nm_per_rad) fixed.push_back(1);
   for (int d = 0; d < n; ++d)
     if (std::find(fixed.begin(), fixed.end(), d) == fixed.end()) free.push_back(d);
   const Eigen::MatrixXd Kff = K(free, free), Mff = M(free, free);
   Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Kff, Mff);
-  const Eigen::MatrixXd phi = eig.eigenvectors();  // M-normalised
-  const Eigen::VectorXd omega2 = eig.eigenvalues();
-  const Eigen::VectorXd modal_force = phi.transpose() * F(free);
+  BeamModes m;
+  m.phi = eig.eigenvectors();  // M-normalised, ascending frequency
+  m.omega2 = eig.eigenvalues();
+  m.modal_force = m.phi.transpose() * F(free);
+  m.alpha_s = b.alpha_s, m.beta_per_s = b.beta_per_s;
   // Sensor row: w interpolated in the element holding the sensor.
   const int se = std::min(elements - 1, static_cast<int>(b.sensor_from_edge_m / h));
   const double xi = b.sensor_from_edge_m / h - se;
@@ -83,53 +134,62 @@ inline BeamResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std:
   sensor(2 * se + 1) = h * (xi - 2 * xi * xi + xi * xi * xi);
   sensor(2 * se + 2) = 3 * xi * xi - 2 * xi * xi * xi;
   sensor(2 * se + 3) = h * (-xi * xi + xi * xi * xi);
-  const Eigen::RowVectorXd sensor_free = sensor(free).transpose();
+  m.sensor = sensor(free).transpose();
   // The load cell's force on the beam balances the prop row of K u + C u' + M u'' (minus no load).
-  const Eigen::RowVectorXd Kp = K.row(2 * prop)(free), Mp = M.row(2 * prop)(free);
+  m.Kp = K.row(2 * prop)(free);
+  m.Mp = M.row(2 * prop)(free);
+  return m;
+}
+
+inline BeamResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std::vector<double>& t_after_drop) {
+  const BeamModes m = beamModes(b, mass_kg);
+  const Eigen::Index modes = m.omega2.size();
   BeamResponse r;
   for (double t : t_after_drop) {
-    Eigen::VectorXd q(free.size()), qd(free.size()), qdd(free.size());
-    for (Eigen::Index j = 0; j < omega2.size(); ++j) {
-      const double w = std::sqrt(omega2(j)), zeta = b.alpha_s * w / 2 + b.beta_per_s / (2 * w);  // Eq 4, modal
+    Eigen::VectorXd q(modes), qd(modes), qdd(modes);
+    for (Eigen::Index j = 0; j < modes; ++j) {
+      const double w = std::sqrt(m.omega2(j)), zeta = m.zeta(j);
       if (zeta >= 1) {  // overdamped (the high modes under stiffness-proportional damping)
         const double root = std::sqrt(zeta * zeta - 1), r1 = -w * (zeta - root), r2 = -w * (zeta + root);
-        const double s = modal_force(j) / omega2(j), e1 = std::exp(r1 * t), e2 = std::exp(r2 * t);
+        const double s = m.modal_force(j) / m.omega2(j), e1 = std::exp(r1 * t), e2 = std::exp(r2 * t);
         q(j) = s * (1 - (r2 * e1 - r1 * e2) / (r2 - r1));
         qd(j) = -s * r1 * r2 * (e1 - e2) / (r2 - r1);
         qdd(j) = -s * r1 * r2 * (r1 * e1 - r2 * e2) / (r2 - r1);
         continue;
       }
-      const double wd = w * std::sqrt(1 - zeta * zeta), s = modal_force(j) / omega2(j), decay = std::exp(-zeta * w * t);
+      const double wd = w * std::sqrt(1 - zeta * zeta), s = m.modal_force(j) / m.omega2(j), decay = std::exp(-zeta * w * t);
       const double c = std::cos(wd * t), sn = std::sin(wd * t), ratio = zeta / std::sqrt(1 - zeta * zeta);
       q(j) = s * (1 - decay * (c + ratio * sn));
       qd(j) = s * decay * (w / std::sqrt(1 - zeta * zeta)) * sn;
       qdd(j) = s * w * w * decay * (c - ratio * sn);  // from q'' = -2 zeta w q' - w^2 (q - s)
     }
-    const Eigen::VectorXd u = phi * q, ud = phi * qd, udd = phi * qdd;
-    const double damping = b.alpha_s * Kp.dot(ud) + b.beta_per_s * Mp.dot(ud);
+    const Eigen::VectorXd u = m.phi * q, ud = m.phi * qd, udd = m.phi * qdd;
+    const double damping = b.alpha_s * m.Kp.dot(ud) + b.beta_per_s * m.Mp.dot(ud);
     r.t_s.push_back(t);
-    r.force_N.push_back(-(Kp.dot(u) + damping + Mp.dot(udd)) * b.force_gain);
-    r.deformation_mm.push_back(1000 * sensor_free.dot(u) * b.deformation_gain);
+    r.force_N.push_back(-(m.Kp.dot(u) + damping + m.Mp.dot(udd)) * b.force_gain + b.force_offset_N);
+    r.deformation_mm.push_back(1000 * m.sensor.dot(u) * b.deformation_gain + b.deformation_offset_mm);
   }
   return r;
 }
 
-// The raw recording of one weight: resting baseline, then the response, noise and quantisation.
-inline analysis::SyntheticRecording beamRecording(const BeamTool& b, double mass_kg, const Daq& daq, int repeat = 1) {
-  std::vector<double> t, after;
-  const auto samples = static_cast<long>(std::lround(daq.duration_s * daq.sample_rate_Hz));
-  for (long i = 0; i < samples; ++i) t.push_back(static_cast<double>(i) / daq.sample_rate_Hz);
-  for (double ti : t) after.push_back(std::max(0.0, ti - daq.drop_time_s));
-  const BeamResponse r = beamWeightDrop(b, mass_kg, after);
-  std::mt19937_64 rng(daq.seed + static_cast<std::uint64_t>(repeat) * 7919);
+// The raw recording of one weight from its channels (`r` at daq.timesAfterDrop_s()): resting
+// baseline, then the response; noise, hum and quantisation.
+inline analysis::SyntheticRecording daqRecording(const BeamResponse& r, double mass_kg, const Daq& daq, int repeat = 1) {
+  const std::vector<double> t = daq.times_s();
+  const std::uint64_t stream = daq.seed + static_cast<std::uint64_t>(repeat) * 7919;
+  std::mt19937_64 rng(stream), hum_rng(~stream);  // the hum's phases apart: the noise is as without hum
   std::normal_distribution<double> noise(0.0, 1.0);
+  std::uniform_real_distribution<double> phase(0.0, 2 * std::numbers::pi);
+  const double force_phase = phase(hum_rng), deformation_phase = phase(hum_rng);
   analysis::SyntheticRecording rec;
   rec.header = {"t", "force", "deformation"};
   rec.columns.assign(3, {});
   for (std::size_t i = 0; i < t.size(); ++i) {
     const bool loaded = t[i] >= daq.drop_time_s;
-    const double force = (loaded ? r.force_N[i] : 0.0) + daq.force_noise_N * noise(rng);
-    const double deformation = (loaded ? r.deformation_mm[i] : 0.0) + daq.deformation_noise_mm * noise(rng);
+    const double hum = 2 * std::numbers::pi * daq.hum_Hz * t[i];
+    const double force = (loaded ? r.force_N[i] : 0.0) + daq.force_noise_N * noise(rng) + daq.force_hum_N * std::sin(hum + force_phase);
+    const double deformation = (loaded ? r.deformation_mm[i] : 0.0) + daq.deformation_noise_mm * noise(rng) +
+                               daq.deformation_hum_mm * std::sin(hum + deformation_phase);
     rec.columns[0].push_back(t[i]);
     rec.columns[1].push_back(std::round(force / daq.force_factor_N_per_unit));
     rec.columns[2].push_back(std::round(deformation / daq.deformation_factor_mm_per_unit));
@@ -141,6 +201,11 @@ inline analysis::SyntheticRecording beamRecording(const BeamTool& b, double mass
                  {"deformation_factor", daq.deformation_factor_mm_per_unit},
                  {"repeat", repeat}};
   return rec;
+}
+
+// The raw recording of one weight hung on beam `b`.
+inline analysis::SyntheticRecording beamRecording(const BeamTool& b, double mass_kg, const Daq& daq, int repeat = 1) {
+  return daqRecording(beamWeightDrop(b, mass_kg, daq.timesAfterDrop_s()), mass_kg, daq, repeat);
 }
 
 }  // namespace demfem::campaign::test
