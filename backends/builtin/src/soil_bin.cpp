@@ -33,7 +33,7 @@ constexpr int kInsertAttempts = 4000;           // random positions tried for a 
 constexpr double kRegionGrowth = 1.1;           // the region's height grows by this factor when full
 constexpr double kLandingFallTimes = 2.0;       // undamped for this many fall times of the highest particle
 constexpr double kUndampedSettle_s = 0.5;       // after landing, undamped for at most this long before the aid
-constexpr double kStageTimeCap_s = 1.5;         // simulated settling time cap per layer stage, after landing
+constexpr double kPourTimeCap_s = 3.0;          // simulated settling time cap of the pour, after landing
 constexpr double kFinalTimeCap_s = 3.0;         // the final settling's cap: the soil that is kept
 constexpr int kSustainedChecks = 3;             // consecutive energy checks below the threshold
 constexpr double kSettlingDamping_per_s = 20;   // the settling aid, -c m v and -c I w (KE e-folds in 25 ms)
@@ -212,41 +212,49 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
   const double g = std::hypot(sim->gravity()[0], sim->gravity()[1], sim->gravity()[2]);
 
   // Progress: the deposition stages and the final settling, each counted by its time cap.
-  const double stages = static_cast<double>(soil.layers.size() + 1);
+  const double stages = 2;  // the pour and the final settling
   adapter::SettledSoil out;
   out.settling.threshold_J = soil.settle_kinetic_energy_J;
-  out.settling.stages = static_cast<std::int32_t>(soil.layers.size()) + 1;
+  out.settling.stages = 2;
   out.settling.pour_friction_scale = friction_scale;
   const auto line = [&](double fraction, const std::string& text) {
     if (progress) progress(fraction, text.empty() ? text : label + text);
   };
-  // One stage per layer, from the deepest up (paper Section 2.9), each with its layer's material.
+  // The layers from the deepest up (paper Section 2.9), each with its layer's material, in slabs
+  // stacked one above the other as LIGGGHTS' deposition stacks them: the slab of a layer spans
+  // kPouredSolidFraction / kInsertSolidFraction times the layer's height range (its particles fill it
+  // at kInsertSolidFraction), from r_max above the floor. They fall as one continuous rain, the
+  // deepest layer landing first. (Each layer poured onto the settled one below packs about 0.8 %
+  // denser: docs/builtin-dem.md, "Soil deposition and reuse".)
+  const double stretch = kPouredSolidFraction / kInsertSolidFraction;
+  const double r_max = soil.diameter_max_m / 2;
+  double stack_top = 0;  // top of the slabs so far
   for (std::size_t s = 0; s < soil.layers.size(); ++s) {
     const int layer = static_cast<int>(soil.layers.size() - 1 - s);
     const auto& spec = soil.layers[static_cast<std::size_t>(layer)];
     const double thickness = spec.bottom_depth_m - spec.top_depth_m;
     const auto count = static_cast<std::size_t>(std::ceil(kPouredSolidFraction * w * l * thickness / mean_volume));
-    double surface = 0;  // the highest particle top so far
-    for (std::size_t i = 0; i < sim->particleCount(); ++i) surface = std::max(surface, sim->particle(i).x[1] + sim->particle(i).radius);
-    const double y0 = surface + soil.diameter_max_m / 2;
-    double height = kPouredSolidFraction / kInsertSolidFraction * thickness;
+    const double y0 = std::max(stack_top, stretch * (soil.fill_height_m - spec.bottom_depth_m) + r_max);
+    double height = stretch * thickness;
     const auto batch = randomInsertion(rng, count, soil, y0, height, sim->materials().index(spec.material), layer);
-    if (y0 + height > binDomain(soil).hi[1])
+    stack_top = y0 + height;
+    if (stack_top > binDomain(soil).hi[1])
       throw std::runtime_error("builtin deposition: the pour of layer " + std::to_string(layer) + " reaches " +
-                               std::to_string((y0 + height) * 1e3) + " mm, above the DEM domain");
+                               std::to_string(stack_top * 1e3) + " mm, above the DEM domain");
     for (const auto& p : batch) sim->addParticle(p);
-    // The highest particle of the batch falls from the top of the region onto the surface.
-    const double fall_s = std::sqrt(2 * (y0 + height - surface) / g);
+  }
+  {
+    // The highest particle falls from the top of the stack to the floor.
+    const double fall_s = std::sqrt(2 * stack_top / g);
     const double start = sim->time();
-    const bool settled = settle(*sim, soil.settle_kinetic_energy_J, kLandingFallTimes * fall_s, kStageTimeCap_s, [&](double f) {
-      line((static_cast<double>(s) + f) / stages, "");
-    });
+    const bool settled = settle(*sim, soil.settle_kinetic_energy_J, kLandingFallTimes * fall_s, kPourTimeCap_s,
+                                [&](double f) { line(f / stages, ""); });
     if (!settled) ++out.settling.stages_capped;
     std::ostringstream text;
-    text << "stage " << s + 1 << "/" << soil.layers.size() << " (" << spec.material << "): " << sim->particleCount()
-         << " particles, kinetic energy " << sim->kineticEnergy() << " J after " << sim->time() - start << " s"
+    text << "pour: " << sim->particleCount() << " particles in " << soil.layers.size() << " layers, kinetic energy "
+         << sim->kineticEnergy() << " J after " << sim->time() - start << " s"
          << (settled ? "" : " (time cap reached before the energy threshold)");
-    line((static_cast<double>(s) + 1.0) / stages, text.str());
+    line(1.0 / stages, text.str());
   }
   // Trim above the fill height; each particle keeps its poured material, its layer by depth.
   std::vector<char> keep(sim->particleCount());
