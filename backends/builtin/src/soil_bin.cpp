@@ -99,24 +99,6 @@ bool settle(DemSimulation& sim, double threshold_J, double landing_s, double cap
   return below == kSustainedChecks;
 }
 
-// The layer a particle poured as layer `poured` has at height y: the layer covering y if it is of
-// the same material, else the nearest layer (in depth) of that material, as LIGGGHTS' deposition
-// tags its particles (docs/liggghts-backend.md): a particle keeps the material it was poured with.
-int layerOfPoured(const study::Soil& soil, int poured, double y) {
-  const int covering = layerAt(soil, y);
-  const std::string& material = soil.layers[static_cast<std::size_t>(poured)].material;
-  if (soil.layers[static_cast<std::size_t>(covering)].material == material) return covering;
-  const double depth = soil.fill_height_m - y;
-  int best = poured;
-  double best_gap = std::numeric_limits<double>::infinity();
-  for (std::size_t l = 0; l < soil.layers.size(); ++l) {
-    if (soil.layers[l].material != material) continue;
-    const double gap = std::max({0.0, soil.layers[l].top_depth_m - depth, depth - soil.layers[l].bottom_depth_m});
-    if (gap < best_gap) best_gap = gap, best = static_cast<int>(l);
-  }
-  return best;
-}
-
 // `count` particles at random non-overlapping positions in the box x in [r_max, W - r_max], z in
 // [r_max, L - r_max], y in [y0, y0 + height] (each sphere wholly inside, LIGGGHTS' all_in), radii
 // uniform in [r_min, r_max]: random sequential insertion, the box growing upwards by kRegionGrowth
@@ -256,13 +238,15 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
          << (settled ? "" : " (time cap reached before the energy threshold)");
     line(1.0 / stages, text.str());
   }
-  // Trim above the fill height; each particle keeps its poured material, its layer by depth.
+  // Trim above the fill height; tag every particle with the layer covering the depth of its centre
+  // (and that layer's material: the pour overfills each layer, so its boundary settles off the
+  // study's), settled again below.
   std::vector<char> keep(sim->particleCount());
   for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = sim->particle(i).x[1] <= soil.fill_height_m;
   sim->keepParticles(keep);
   for (std::size_t i = 0; i < sim->particleCount(); ++i) {
-    const auto p = sim->particle(i);
-    sim->setParticleMaterial(static_cast<int>(i), p.material, layerOfPoured(soil, p.layer, p.x[1]));
+    const int layer = layerAt(soil, sim->particle(i).x[1]);
+    sim->setParticleMaterial(static_cast<int>(i), sim->materials().index(soil.layers[static_cast<std::size_t>(layer)].material), layer);
   }
   const long pour_steps = sim->stepCount();
   const double pour_time = sim->time();
