@@ -304,10 +304,9 @@ std::string kgm3(double value) {
 }  // namespace
 
 std::size_t estimatedParticleCount(const study::Soil& soil) {
-  // The gravity pour settles at about 0.57 (docs/builtin-dem.md, "Soil deposition and reuse").
-  constexpr double kSettledPacking = 0.57;
+  // What the pour inserts (it settles at about 0.57: docs/builtin-dem.md, "Soil deposition and reuse").
   return static_cast<std::size_t>(
-      std::llround(kSettledPacking * soil.bin_width_m * soil.bin_length_m * soil.fill_height_m / meanParticleVolume(soil)));
+      std::llround(kPouredSolidFraction * soil.bin_width_m * soil.bin_length_m * soil.fill_height_m / meanParticleVolume(soil)));
 }
 
 adapter::SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress) {

@@ -77,7 +77,9 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     }
     CHECK(soil.backend == "builtin");
     CHECK(soil.seed == st.soil.deposition_seed);
-    CHECK(soil.settling.stages == static_cast<int>(st.soil.layers.size()) + 1);
+    CHECK(soil.settling.stages == 2);  // the pour and the final settling
+    CHECK(soil.settling.bulk_density_kg_m3 == adapter::bulkDensity(soil.particles, st.soil));
+    CHECK(soil.settling.coordination_number == adapter::meanCoordinationNumber(soil.particles));
     CHECK(soil.settling.threshold_J == st.soil.settle_kinetic_energy_J);
     CHECK(soil.settling.surface_height_m == adapter::soilSurfaceHeight(soil.particles, st.soil.diameter_max_m));
     CHECK(soil.settling.surface_height_m > st.soil.fill_height_m - st.soil.diameter_max_m);
