@@ -77,15 +77,15 @@ nlohmann::json depositedSoil(const study::Study& s, std::string& text) {
     return {{"file", file.string()}, {"refused", e.what()}};
   }
   const auto& f = soil.settling;
-  char line[512];
+  char target[160] = " (plain gravity pour)";
+  if (f.target_bulk_density_kg_m3 > 0)
+    std::snprintf(target, sizeof target, " (stated %.1f kg/m3, poured with the inter-particle friction x %.3f)",
+                  f.target_bulk_density_kg_m3, f.pour_friction_scale);
+  char line[1024];
   std::snprintf(line, sizeof line,
                 "soil_file = %s\nsoil_particles = %zu\nsoil_packing_fraction = %.4f\nsoil_bulk_density = %.1f kg/m3%s\n"
                 "soil_coordination_number = %.3f\n",
-                file.string().c_str(), soil.particles.size(), f.packing_fraction, f.bulk_density_kg_m3,
-                f.target_bulk_density_kg_m3 > 0
-                    ? (" (stated " + std::to_string(f.target_bulk_density_kg_m3) + " kg/m3, pour friction x " +
-                       std::to_string(f.pour_friction_scale) + ")").c_str()
-                    : " (plain gravity pour)",
+                file.string().c_str(), soil.particles.size(), f.packing_fraction, f.bulk_density_kg_m3, target,
                 f.coordination_number);
   text = line;
   return nlohmann::json::parse(adapter::soilRecordJson(soil, file, adapter::settledSoilChecksum(file)));
