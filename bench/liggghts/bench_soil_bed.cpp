@@ -5,6 +5,9 @@
 // seeds, and the built-in DEM's means over LIGGGHTS' against the issue's targets (count and packing
 // fraction within 1.5 %, coordination number within 5 %). Prints a table; --json writes the same
 // numbers.
+// --rest-s T: each built-in bed is then left alone for T s of simulated time with the study's laws
+// at the run's step (no settling aid), and its rms particle speed at the end and largest particle
+// displacement are reported (issue 53's bed at rest: below 0.3 mm/s and 1 mm after 2 s).
 //
 // Soils are kept by hash in --soil-dir (a scratch directory: default a new one under the system's
 // temporary directory) and reused unless --force: LIGGGHTS' soils do not change when the built-in
@@ -14,9 +17,11 @@
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/liggghts/backend.hpp"
+#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -38,7 +43,35 @@ struct Bed {
   double packing_fraction = 0, bulk_density_kg_m3 = 0, coordination_number = 0, surface_mm = 0, simulated_s = 0;
   double wall_s = 0;  // NaN when the soil file was reused
   bool settled = false;
+  double rest_rms_speed_mm_s = std::nan(""), rest_max_displacement_mm = std::nan("");  // --rest-s
 };
+
+// Leaves the bed alone for `rest_s` of simulated time (the study's laws, the run's step) and
+// measures its rms speed at the end and the largest displacement of a particle centre.
+void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double rest_s, int threads, Bed& bed) {
+  builtin::DemSimulation sim(s.soil, builtin::binDomain(s.soil), threads);
+  builtin::addBinWalls(sim, s.soil);
+  builtin::addSettledParticles(sim, s.soil, soil);
+  sim.setTimeStep(study::demStepDividing(physics::demTimeStep(s).step_s, s.fem.dt_s));
+  sim.setRollingRegularisationStep(physics::rollingRegularisationStep(s));
+  std::vector<builtin::Vec3> start(sim.particleCount());
+  for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
+  const long steps = std::lround(rest_s / sim.timeStep());
+  const long chunk = std::max(1L, steps / 20);
+  for (long done = 0; done < steps; done += chunk) {
+    sim.run(std::min(chunk, steps - done));
+    std::cerr << "  rest: " << sim.time() << " s of " << rest_s << " s\r" << std::flush;
+  }
+  double v2 = 0, max_d = 0;
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    const auto p = sim.particle(i);
+    v2 += p.v[0] * p.v[0] + p.v[1] * p.v[1] + p.v[2] * p.v[2];
+    max_d = std::max(max_d, std::hypot(p.x[0] - start[i][0], p.x[1] - start[i][1], p.x[2] - start[i][2]));
+  }
+  bed.rest_rms_speed_mm_s = 1e3 * std::sqrt(v2 / static_cast<double>(start.size()));
+  bed.rest_max_displacement_mm = 1e3 * max_d;
+  std::cerr << '\n';
+}
 
 struct Stats {
   double mean = 0, std_dev = 0;
@@ -54,7 +87,7 @@ Stats stats(const std::vector<double>& v) {
 }
 
 Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t seed, int threads,
-                   const std::filesystem::path& dir, bool force) {
+                   const std::filesystem::path& dir, bool force, double rest_s) {
   s.soil.deposition_backend = backend;
   s.soil.deposition_seed = seed;
   const auto file = adapter::settledSoilFile(s, dir);
@@ -87,6 +120,7 @@ Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t see
   bed.surface_mm = soil.settling.surface_height_m * 1e3;
   bed.simulated_s = soil.settling.simulated_s;
   bed.settled = adapter::unsettledReason(soil.settling).empty();
+  if (rest_s > 0 && backend == "builtin") measureRest(s, soil, rest_s, threads, bed);
   return bed;
 }
 
@@ -99,12 +133,15 @@ int main(int argc, char** argv) {
   int seeds = 3, threads = 1;
   std::string soil_dir;
   bool force = false;
+  double rest_s = 0;
   std::vector<std::string> backends{"builtin", "liggghts"};
   app.add_option("--study", file, "Study file (default: studies/quick_liggghts.json)")->check(CLI::ExistingFile);
   app.add_option("--seeds", seeds, "Deposition seeds 1..N")->check(CLI::PositiveNumber);
   app.add_option("--threads", threads, "Threads of the built-in deposition")->check(CLI::PositiveNumber);
   app.add_option("--soil-dir", soil_dir, "Directory of the soils (reused by hash; default: a new temporary one)");
   app.add_option("--backends", backends, "Engines that deposit")->check(CLI::IsMember({"builtin", "liggghts"}));
+  app.add_option("--rest-s", rest_s, "Leave each built-in bed alone this long (s) and report its rest state")
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("--force", force, "Deposit again even where the soil file exists");
   std::string& json_target = cli::addJsonOption(app);
   CLI11_PARSE(app, argc, argv);
@@ -115,16 +152,21 @@ int main(int argc, char** argv) {
                          : std::filesystem::path(soil_dir);
     std::vector<Bed> beds;
     for (int seed = 1; seed <= seeds; ++seed)
-      for (const auto& backend : backends) beds.push_back(depositOrReuse(base, backend, static_cast<std::uint64_t>(seed), threads, dir, force));
+      for (const auto& backend : backends) beds.push_back(depositOrReuse(base, backend, static_cast<std::uint64_t>(seed), threads, dir, force, rest_s));
 
     const bool text = cli::textOnStdout(json_target);
     if (text) {
       std::printf("%s, soils in %s\n%-9s %5s %9s %8s %11s %8s %9s %9s %s\n", file.c_str(), dir.string().c_str(), "backend",
                   "seed", "particles", "packing", "bulk_kg_m3", "coord", "surf_mm", "wall_s", "settled");
-      for (const Bed& b : beds)
-        std::printf("%-9s %5llu %9zu %8.4f %11.1f %8.3f %9.2f %9.1f %s\n", b.backend.c_str(),
+      for (const Bed& b : beds) {
+        std::printf("%-9s %5llu %9zu %8.4f %11.1f %8.3f %9.2f %9.1f %s", b.backend.c_str(),
                     static_cast<unsigned long long>(b.seed), b.particles, b.packing_fraction, b.bulk_density_kg_m3,
                     b.coordination_number, b.surface_mm, b.wall_s, b.settled ? "yes" : "NO");
+        if (!std::isnan(b.rest_rms_speed_mm_s))
+          std::printf("  after %.2f s alone: rms speed %.4f mm/s, largest displacement %.4f mm", rest_s,
+                      b.rest_rms_speed_mm_s, b.rest_max_displacement_mm);
+        std::printf("\n");
+      }
     }
     nlohmann::json report{{"study", file}, {"seeds", seeds}, {"builtin_threads", threads}, {"soil_dir", dir.string()}};
     nlohmann::json runs = nlohmann::json::array();
@@ -134,7 +176,11 @@ int main(int argc, char** argv) {
                       {"coordination_number", b.coordination_number}, {"surface_height_mm", b.surface_mm},
                       {"simulated_s", b.simulated_s},
                       {"wall_s", std::isnan(b.wall_s) ? nlohmann::json() : nlohmann::json(b.wall_s)},
-                      {"settled", b.settled}});
+                      {"settled", b.settled},
+                      {"rest_s", rest_s},
+                      {"rest_rms_speed_mm_s", std::isnan(b.rest_rms_speed_mm_s) ? nlohmann::json() : nlohmann::json(b.rest_rms_speed_mm_s)},
+                      {"rest_max_displacement_mm",
+                       std::isnan(b.rest_max_displacement_mm) ? nlohmann::json() : nlohmann::json(b.rest_max_displacement_mm)}});
     report["runs"] = runs;
     std::map<std::string, std::map<std::string, Stats>> summary;
     for (const auto& backend : backends) {
