@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -55,7 +56,11 @@ nlohmann::json headerJson(const SettledSoil& soil) {
             {"final_phase_capped", s.final_phase_capped},
             {"simulated_s", s.simulated_s},
             {"surface_height_m", s.surface_height_m},
-            {"packing_fraction", s.packing_fraction}}},
+            {"packing_fraction", s.packing_fraction},
+            {"bulk_density_kg_m3", s.bulk_density_kg_m3},
+            {"coordination_number", s.coordination_number},
+            {"target_bulk_density_kg_m3", s.target_bulk_density_kg_m3},
+            {"pour_friction_scale", s.pour_friction_scale}}},
           {"particle_count", soil.particles.size()}};
 }
 
@@ -145,7 +150,9 @@ SettledSoil readSettledSoil(const std::filesystem::path& file) {
     soil.settling = {s.at("kinetic_energy_J").get<double>(), s.at("threshold_J").get<double>(),
                      s.at("stages").get<std::int32_t>(),     s.at("stages_capped").get<std::int32_t>(),
                      s.at("final_phase_capped").get<bool>(), s.at("simulated_s").get<double>(),      s.at("surface_height_m").get<double>(),
-                     s.at("packing_fraction").get<double>()};
+                     s.at("packing_fraction").get<double>(), s.at("bulk_density_kg_m3").get<double>(),
+                     s.at("coordination_number").get<double>(), s.at("target_bulk_density_kg_m3").get<double>(),
+                     s.at("pour_friction_scale").get<double>()};
     count = h.at("particle_count").get<std::uint64_t>();
   } catch (const std::exception& e) {
     throw fail(std::string("header: ") + e.what());
@@ -205,6 +212,58 @@ double packingFraction(const std::vector<SoilParticle>& particles, const study::
   return volume / (soil.bin_width_m * soil.bin_length_m * soil.fill_height_m);
 }
 
+double bulkDensity(const std::vector<SoilParticle>& particles, const study::Soil& soil) {
+  std::vector<double> density(soil.layers.size(), -1.0);
+  for (std::size_t l = 0; l < soil.layers.size(); ++l)
+    for (const auto& m : soil.materials)
+      if (m.name == soil.layers[l].material) density[l] = m.density_kg_m3;
+  double mass = 0;
+  for (const auto& p : particles) {
+    if (p.layer < 0 || static_cast<std::size_t>(p.layer) >= density.size() || density[static_cast<std::size_t>(p.layer)] < 0)
+      throw std::invalid_argument("bulkDensity: particle of layer " + std::to_string(p.layer) +
+                                  " has no layer material in /soil/materials");
+    mass += density[static_cast<std::size_t>(p.layer)] * 4.0 / 3.0 * std::numbers::pi * p.radius_m * p.radius_m * p.radius_m;
+  }
+  return mass / (soil.bin_width_m * soil.bin_length_m * soil.fill_height_m);
+}
+
+double meanCoordinationNumber(const std::vector<SoilParticle>& particles) {
+  if (particles.empty()) return 0;
+  double r_max = 0;
+  std::array<double, 3> lo{particles[0].x_m}, hi{particles[0].x_m};
+  for (const auto& p : particles) {
+    r_max = std::max(r_max, p.radius_m);
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], p.x_m[c]), hi[c] = std::max(hi[c], p.x_m[c]);
+  }
+  // Cells of one largest diameter: a touching pair is in the same or a neighbouring cell.
+  const double cell = std::max(2 * r_max, 1e-12);
+  std::array<long, 3> n{};
+  for (int c = 0; c < 3; ++c) n[c] = static_cast<long>((hi[c] - lo[c]) / cell) + 1;
+  const auto index = [&](const SoilParticle& p, int c) {
+    return std::min(n[c] - 1, static_cast<long>((p.x_m[c] - lo[c]) / cell));
+  };
+  std::vector<std::vector<std::size_t>> cells(static_cast<std::size_t>(n[0] * n[1] * n[2]));
+  for (std::size_t i = 0; i < particles.size(); ++i)
+    cells[static_cast<std::size_t>((index(particles[i], 2) * n[1] + index(particles[i], 1)) * n[0] + index(particles[i], 0))]
+        .push_back(i);
+  std::size_t pairs = 0;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const auto& a = particles[i];
+    const long cx = index(a, 0), cy = index(a, 1), cz = index(a, 2);
+    for (long z = std::max(0L, cz - 1); z <= std::min(n[2] - 1, cz + 1); ++z)
+      for (long y = std::max(0L, cy - 1); y <= std::min(n[1] - 1, cy + 1); ++y)
+        for (long x = std::max(0L, cx - 1); x <= std::min(n[0] - 1, cx + 1); ++x)
+          for (const std::size_t j : cells[static_cast<std::size_t>((z * n[1] + y) * n[0] + x)]) {
+            if (j <= i) continue;
+            const auto& b = particles[j];
+            const double dx = a.x_m[0] - b.x_m[0], dy = a.x_m[1] - b.x_m[1], dz = a.x_m[2] - b.x_m[2];
+            const double reach = a.radius_m + b.radius_m;
+            if (dx * dx + dy * dy + dz * dz < reach * reach) ++pairs;
+          }
+  }
+  return 2.0 * static_cast<double>(pairs) / static_cast<double>(particles.size());
+}
+
 std::string unsettledReason(const SettlingFigures& s) {
   std::string reason;
   if (s.final_phase_capped) reason = "the final settling phase hit its time cap above the kinetic-energy threshold";
@@ -242,7 +301,12 @@ std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path&
                               {"final_phase_capped", s.final_phase_capped},
                               {"simulated_s", s.simulated_s},
                               {"surface_height_mm", s.surface_height_m * 1e3},
-                              {"packing_fraction", s.packing_fraction}};
+                              {"packing_fraction", s.packing_fraction},
+                              {"bulk_density_kg_m3", s.bulk_density_kg_m3},
+                              {"coordination_number", s.coordination_number},
+                              {"target_bulk_density_kg_m3",
+                               s.target_bulk_density_kg_m3 > 0 ? nlohmann::json(s.target_bulk_density_kg_m3) : nlohmann::json()},
+                              {"pour_friction_scale", s.pour_friction_scale}};
   return record.dump();
 }
 

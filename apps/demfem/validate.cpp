@@ -1,6 +1,7 @@
 // `demfem validate STUDY...`: checks study files and prints their effective values with units.
 #include "commands.hpp"
 #include "run_cost.hpp"
+#include "demfem/adapter/settled_soil.hpp"
 #include "demfem/cli/backend_registry.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
@@ -9,7 +10,9 @@
 
 #include <cstdio>
 
+#include <filesystem>
 #include <iostream>
+#include <stdexcept>
 #include <memory>
 #include <string>
 #include <vector>
@@ -57,6 +60,37 @@ nlohmann::json costJson(const RunCost& c) {
           {"wall_time_s", c.wallSeconds()}};
 }
 
+// The study's deposited soil in the soil directory ($DEMFEM_SOIL_DIR or ./soil), if there is one:
+// its figures as a run records them (adapter::soilRecordJson), among them the bulk density reached
+// and the one stated (soil.deposition.bulk_density_kg_m3); null if not deposited yet.
+nlohmann::json depositedSoil(const study::Study& s, std::string& text) {
+  const auto file = adapter::settledSoilFile(s, adapter::defaultSoilDirectory());
+  if (!std::filesystem::exists(file)) {
+    text = "soil_file = " + file.string() + " (not deposited yet)\n";
+    return nullptr;
+  }
+  adapter::SettledSoil soil;
+  try {
+    soil = adapter::readSettledSoil(file, s);
+  } catch (const std::runtime_error& e) {
+    text = "soil_file = " + file.string() + " (refused: " + e.what() + ")\n";
+    return {{"file", file.string()}, {"refused", e.what()}};
+  }
+  const auto& f = soil.settling;
+  char target[160] = " (plain gravity pour)";
+  if (f.target_bulk_density_kg_m3 > 0)
+    std::snprintf(target, sizeof target, " (stated %.1f kg/m3, poured with the inter-particle friction x %.3f)",
+                  f.target_bulk_density_kg_m3, f.pour_friction_scale);
+  char line[1024];
+  std::snprintf(line, sizeof line,
+                "soil_file = %s\nsoil_particles = %zu\nsoil_packing_fraction = %.4f\nsoil_bulk_density = %.1f kg/m3%s\n"
+                "soil_coordination_number = %.3f\n",
+                file.string().c_str(), soil.particles.size(), f.packing_fraction, f.bulk_density_kg_m3, target,
+                f.coordination_number);
+  text = line;
+  return nlohmann::json::parse(adapter::soilRecordJson(soil, file, adapter::settledSoilChecksum(file)));
+}
+
 }  // namespace
 
 void addValidateCommand(CLI::App& app) {
@@ -78,13 +112,15 @@ void addValidateCommand(CLI::App& app) {
         const study::Study s = cli::loadCheckedStudy(file);
         const std::string hash = study::hasSoil(s.kind) ? study::soilHash(s) : std::string();
         const RunCost cost = estimateRunCost(s);
+        std::string soil_text;
+        const nlohmann::json soil = hash.empty() ? nlohmann::json() : depositedSoil(s, soil_text);
         if (text) {
           std::cout << "# " << file << ": valid\n" << study::describe(s);
-          if (!hash.empty()) std::cout << "soil_hash = " << hash << '\n';
+          if (!hash.empty()) std::cout << "soil_hash = " << hash << '\n' << soil_text;
           std::cout << describeCost(cost) << '\n';
         }
         nlohmann::json entry{{"file", study::validUtf8(file)}, {"valid", true}, {"effective", study::toJson(s)}, {"cost", costJson(cost)}};
-        if (!hash.empty()) entry["soil_hash"] = hash;
+        if (!hash.empty()) entry["soil_hash"] = hash, entry["soil"] = soil;
         report["studies"].push_back(entry);
       } catch (const study::StudyError& e) {
         ++invalid;

@@ -57,6 +57,11 @@ std::vector<Issue> backendIssues(const Study& study, const std::vector<BackendCa
     issues.push_back({"/soil/deposition/backend", "the " + deposition + " backend simulates no particles: it cannot deposit a soil"});
     deposits = nullptr;
   }
+  // The density protocol (docs/builtin-dem.md, "Soil deposition and reuse") is the built-in deposition's.
+  if (study.soil.bulk_density_kg_m3 && deposition != "builtin")
+    issues.push_back({"/soil/deposition/bulk_density_kg_m3",
+                      "a bed at a stated bulk density is deposited by the builtin backend only (the " + deposition +
+                          " deposition is the plain gravity pour): remove the key or deposit with builtin"});
   // Each backend that touches the soil once: the deposition's, and the run's if it is another.
   std::vector<Issue> laws;
   if (deposits) checkLaws(*deposits, study.soil.contact, laws);

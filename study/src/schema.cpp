@@ -445,6 +445,10 @@ const Section<Soil>& depositionSection() {
       {{"seed", &Soil::deposition_seed, Need::Optional, {}, kSeed, always(), {}, "random numbers of the gravity deposition"},
        {"settle_kinetic_energy_J", &Soil::settle_kinetic_energy_J, Need::Optional, leftOpen(0.0, 1e6), {}, always(), {},
         "deposition ends below this total kinetic energy"},
+       {"bulk_density_kg_m3", &Soil::bulk_density_kg_m3, Need::Optional, kDensity, {}, always(), "the plain gravity pour",
+        "the bed's bulk density (particle mass over bin width x length x fill height), reached within 1 % by a "
+        "pour with reduced inter-particle friction, the study's friction then restored; built-in deposition only "
+        "(docs/builtin-dem.md, \"Soil deposition and reuse\")"},
        {"backend", &Soil::deposition_backend, Need::Optional, {}, {}, always(), {},
         "the DEM backend that deposits the settled soil; every DEM backend starts from that one soil file "
         "(docs/builtin-dem.md, \"Settled soil file\")"}}};

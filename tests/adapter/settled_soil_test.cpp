@@ -30,7 +30,7 @@ adapter::SettledSoil sample() {
   soil.backend = "liggghts";
   soil.seed = 7;
   soil.cores = 2;
-  soil.settling = {3.5e-7, 1e-6, 5, 0, false, 2.25, 0.0498, 0.55};
+  soil.settling = {3.5e-7, 1e-6, 5, 0, false, 2.25, 0.0498, 0.55, 1430.5, 4.52, 1450.0, 0.375};
   // Values whose every bit matters: no decimal text would keep them.
   soil.particles = {{{0.1 / 3, std::nextafter(0.02, 1.0), 0.3}, 0.00475 + 1e-17, 0},
                     {{std::numbers::pi / 100, 0.011, 1e-300}, 0.005, 2},
@@ -156,4 +156,31 @@ TEST_CASE("surface height and packing fraction follow their definitions", "[adap
   soil.bin_width_m = 0.1, soil.bin_length_m = 0.2, soil.fill_height_m = 0.05;
   const double sphere = 4.0 / 3.0 * std::numbers::pi * 0.005 * 0.005 * 0.005;
   CHECK(adapter::packingFraction(p, soil) == Approx(3 * sphere / (0.1 * 0.2 * 0.05)).epsilon(1e-15));
+}
+
+TEST_CASE("bulk density weighs each particle with its layer's material density", "[adapter][soil]") {
+  study::Soil soil;
+  soil.bin_width_m = 0.1, soil.bin_length_m = 0.2, soil.fill_height_m = 0.05;
+  soil.materials = {{"light", 1000, 1e7, 0.3, 0}, {"heavy", 2600, 1e7, 0.3, 0}};
+  soil.layers = {{"light", 0, 0.01}, {"heavy", 0.01, 0.05}};
+  const std::vector<adapter::SoilParticle> p{{{0.05, 0.045, 0.1}, 0.005, 0}, {{0.05, 0.02, 0.1}, 0.004, 1}};
+  const double pi = std::numbers::pi;
+  const double mass = 1000 * 4.0 / 3.0 * pi * 0.005 * 0.005 * 0.005 + 2600 * 4.0 / 3.0 * pi * 0.004 * 0.004 * 0.004;
+  CHECK(adapter::bulkDensity(p, soil) == Approx(mass / (0.1 * 0.2 * 0.05)).epsilon(1e-14));
+  const std::vector<adapter::SoilParticle> foreign{{{0.05, 0.045, 0.1}, 0.005, 2}};
+  CHECK_THROWS_AS(adapter::bulkDensity(foreign, soil), std::invalid_argument);
+}
+
+TEST_CASE("the coordination number counts touching particle pairs twice over the particles", "[adapter][soil]") {
+  // A 3 x 3 x 3 simple cubic lattice, neighbours overlapping by 0.1 mm, diagonals apart: 54 pairs.
+  std::vector<adapter::SoilParticle> lattice;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) lattice.push_back({{0.0099 * i, 0.0099 * j, 0.0099 * k}, 0.005, 0});
+  CHECK(adapter::meanCoordinationNumber(lattice) == Approx(2.0 * 54 / 27).epsilon(1e-15));
+  // Spaced 0.1 mm apart: no contact.
+  for (auto& p : lattice)
+    for (double& c : p.x_m) c *= 0.0101 / 0.0099;
+  CHECK(adapter::meanCoordinationNumber(lattice) == 0);
+  CHECK(adapter::meanCoordinationNumber({}) == 0);
 }

@@ -192,6 +192,9 @@ TEST_CASE("the soil hash is stable and depends on the soil only", "[study]") {
   nlohmann::json seed = doc;
   seed["soil"]["deposition"]["seed"] = 2;
   CHECK(hashOf(seed) != reference);
+  nlohmann::json density = doc;
+  density["soil"]["deposition"]["bulk_density_kg_m3"] = 1500;  // the density protocol's target
+  CHECK(hashOf(density) != reference);
   nlohmann::json wall = doc;
   wall["soil"]["materials"][4]["E_Pa"] = 2.05e11;  // steel: the bin
   CHECK(hashOf(wall) != reference);

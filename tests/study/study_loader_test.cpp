@@ -309,6 +309,17 @@ TEST_CASE("a backend that lacks the study's contact laws is named with each law,
   REQUIRE(missing.size() == 1);
   CHECK(missing[0].path == "/dem/backend");
   CHECK(missing[0].message == "unknown backend \"nowhere\" (this build offers builtin, hooke-only)");
+  // The density protocol is the built-in deposition's: another deposition backend stating one is refused.
+  s.dem.backend = "builtin";
+  s.soil.bulk_density_kg_m3 = 1500;
+  CHECK(backendIssues(s, {builtin, hooke}).empty());
+  BackendCapabilities other = all;
+  other.name = "other";
+  s.soil.deposition_backend = "other";
+  const std::vector<Issue> density = backendIssues(s, {builtin, other});
+  REQUIRE(density.size() == 1);
+  CHECK(density[0].path == "/soil/deposition/bulk_density_kg_m3");
+  CHECK(density[0].message.find("builtin backend only") != std::string::npos);
 }
 
 TEST_CASE("the effective study round-trips through its file form", "[study]") {

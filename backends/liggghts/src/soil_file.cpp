@@ -136,6 +136,8 @@ adapter::SettledSoil depositInInstance(const study::Study& study, const InputDec
   soil.settling.simulated_s = t;
   soil.settling.surface_height_m = adapter::soilSurfaceHeight(soil.particles, study.soil.diameter_max_m);
   soil.settling.packing_fraction = adapter::packingFraction(soil.particles, study.soil);
+  soil.settling.bulk_density_kg_m3 = adapter::bulkDensity(soil.particles, study.soil);
+  soil.settling.coordination_number = adapter::meanCoordinationNumber(soil.particles);
   return soil;
 }
 

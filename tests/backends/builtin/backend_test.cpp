@@ -77,7 +77,9 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     }
     CHECK(soil.backend == "builtin");
     CHECK(soil.seed == st.soil.deposition_seed);
-    CHECK(soil.settling.stages == static_cast<int>(st.soil.layers.size()) + 1);
+    CHECK(soil.settling.stages == 2);  // the pour and the final settling
+    CHECK(soil.settling.bulk_density_kg_m3 == adapter::bulkDensity(soil.particles, st.soil));
+    CHECK(soil.settling.coordination_number == adapter::meanCoordinationNumber(soil.particles));
     CHECK(soil.settling.threshold_J == st.soil.settle_kinetic_energy_J);
     CHECK(soil.settling.surface_height_m == adapter::soilSurfaceHeight(soil.particles, st.soil.diameter_max_m));
     CHECK(soil.settling.surface_height_m > st.soil.fill_height_m - st.soil.diameter_max_m);
@@ -268,11 +270,23 @@ TEST_CASE("dragging the tool through the soil loads it against the travel, more 
   study::Study shallow = smallStudy();  // 10 mm deep, front face at z = 30 mm, dragged along +z
   study::Study deep = shallow;
   deep.tools[0].motion.depth_m = 0.02;  // 20 mm above the floor: two grains, no jamming under the tip
-  // 40 mm of travel (the bin is 120 mm long); the mean is taken over the last 20 mm.
-  const Draught d10 = dragTool(shallow, 0.04);
-  const Draught d20 = dragTool(deep, 0.04);
+  // 40 mm of travel (the bin is 120 mm long); the mean is taken over the last 20 mm, and over three
+  // deposition seeds: one realisation of a bin of a few hundred grains scatters by tens of percent
+  // (docs/builtin-dem.md: compare seeds), and the ratio of two of them more.
+  constexpr int kSeeds = 3;
+  Draught d10, d20;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    shallow.soil.deposition_seed = deep.soil.deposition_seed = static_cast<std::uint64_t>(seed);
+    const Draught a = dragTool(shallow, 0.04), b = dragTool(deep, 0.04);
+    UNSCOPED_INFO("seed " << seed << ": draught at 10 mm " << a.mean_N << " +- " << a.standard_error_N << " N, at 20 mm "
+                          << b.mean_N << " +- " << b.standard_error_N << " N");
+    d10.mean_N += a.mean_N / kSeeds, d20.mean_N += b.mean_N / kSeeds;
+    d10.standard_error_N += a.standard_error_N * a.standard_error_N / (kSeeds * kSeeds);
+    d20.standard_error_N += b.standard_error_N * b.standard_error_N / (kSeeds * kSeeds);
+  }
+  d10.standard_error_N = std::sqrt(d10.standard_error_N), d20.standard_error_N = std::sqrt(d20.standard_error_N);
   INFO("draught at 10 mm: " << d10.mean_N << " +- " << d10.standard_error_N << " N; at 20 mm: " << d20.mean_N << " +- "
-                            << d20.standard_error_N << " N");
+                            << d20.standard_error_N << " N (means over " << kSeeds << " seeds)");
   // The soil pushes the tool back (-z), well beyond the scatter of the mean.
   CHECK(d10.mean_N < -3 * d10.standard_error_N);
   CHECK(d20.mean_N < -3 * d20.standard_error_N);
@@ -280,8 +294,9 @@ TEST_CASE("dragging the tool through the soil loads it against the travel, more 
   // factor (20/10)^2 = 4 here). The tip engages grains centred up to a radius R below it, so the
   // depth that counts is d + R, and friction on the plate's faces adds a part linear in it: the
   // draught grows at least as fast as d + R, a factor (20 + R) / (10 + R) = 1.66 for R = 5.25 mm
-  // (measured on two machines, whose libm rounds differently and so give two realisations of
-  // this chaotic pack: 1.89 and above 2).
+  // (measured on two machines on the old lattice deposition, one seed, whose libm rounds differently
+  // and so give two realisations of this chaotic pack: 1.89 and above 2; on the gravity pour of
+  // 2026-12-07 seed 1 alone gives 1.20 (1.50 and 1.79 N), the mean of seeds 1-3 1.70 (1.12 and 1.91 N).
   const double grain_radius_m = shallow.soil.diameter_max_m / 2;
   CHECK(d20.mean_N < (0.02 + grain_radius_m) / (0.01 + grain_radius_m) * d10.mean_N);
 

@@ -11,7 +11,9 @@
 //     uint32    byte length H of the header
 //     H bytes   header, a JSON object: soil_hash (study::soilHash), deposition {backend, seed, cores},
 //               settling {kinetic_energy_J, threshold_J, stages, stages_capped,
-//               final_phase_capped, simulated_s, surface_height_m, packing_fraction}, particle_count
+//               final_phase_capped, simulated_s, surface_height_m, packing_fraction,
+//               bulk_density_kg_m3, coordination_number, target_bulk_density_kg_m3,
+//               pour_friction_scale}, particle_count
 //     36 bytes per particle: x_m, y_m, z_m, radius_m (float64), layer (int32)
 //     uint64    FNV-1a 64 (study::fnv1a64) of every byte before it
 //   readSettledSoil() checks magic, version, header, length and checksum and throws
@@ -33,7 +35,7 @@
 
 namespace demfem::adapter {
 
-inline constexpr std::uint32_t kSettledSoilFormatVersion = 2;
+inline constexpr std::uint32_t kSettledSoilFormatVersion = 3;
 
 struct SoilParticle {
   std::array<double, 3> x_m{};
@@ -53,6 +55,12 @@ struct SettlingFigures {
   double simulated_s = 0;        // simulated deposition time
   double surface_height_m = 0;   // soilSurfaceHeight()
   double packing_fraction = 0;   // packingFraction()
+  double bulk_density_kg_m3 = 0;  // bulkDensity(): what a core sampler measures
+  double coordination_number = 0;  // meanCoordinationNumber()
+  // soil.deposition.bulk_density_kg_m3 the deposition had to reach (0: none, the plain gravity pour)
+  // and the factor on the inter-particle friction of the pour that reached it (1: the study's).
+  double target_bulk_density_kg_m3 = 0;
+  double pour_friction_scale = 1;
   bool operator==(const SettlingFigures&) const = default;
 };
 
@@ -84,6 +92,13 @@ std::filesystem::path defaultSoilDirectory();
 double soilSurfaceHeight(const std::vector<SoilParticle>& particles, double diameter_max_m);
 // Particle volume over bin width x length x fill height.
 double packingFraction(const std::vector<SoilParticle>& particles, const study::Soil& soil);
+// Bulk density (kg/m^3): particle mass (each particle's volume times the density of its layer's
+// material) over bin width x length x fill height. Throws std::invalid_argument for a layer index
+// outside soil.layers or a layer material not in soil.materials.
+double bulkDensity(const std::vector<SoilParticle>& particles, const study::Soil& soil);
+// Mean coordination number: twice the particle pairs whose centre distance is below the sum of their
+// radii (touching), over the particle count; wall contacts are not counted. 0 for no particles.
+double meanCoordinationNumber(const std::vector<SoilParticle>& particles);
 
 // Why the soil is not settled ("" if it is): the final phase hit its time cap or the final kinetic
 // energy is not below the threshold. An earlier phase that hit its cap only poured the next layer
@@ -96,8 +111,8 @@ std::string unsettledSoilMessage(const std::filesystem::path& file, const Settli
 // The soil's figures as the JSON object text a run records ("soil" in sensors.json): file,
 // file_checksum, soil_hash, deposition_backend, deposition_seed, deposition_cores, particles,
 // settled, kinetic_energy_J, threshold_J, stages, stages_capped, final_phase_capped, simulated_s,
-// surface_height_mm,
-// packing_fraction.
+// surface_height_mm, packing_fraction, bulk_density_kg_m3, coordination_number,
+// target_bulk_density_kg_m3 (null without a target), pour_friction_scale.
 std::string soilRecordJson(const SettledSoil& soil, const std::filesystem::path& file, const std::string& checksum);
 
 }  // namespace demfem::adapter

@@ -118,6 +118,12 @@ struct Soil {
   ContactModel contact;
   std::uint64_t deposition_seed = 1;
   double settle_kinetic_energy_J = 1e-6;   // deposition ends below this total kinetic energy
+  // The bed's measured bulk density (soil.deposition.bulk_density_kg_m3, kg/m^3: particle mass over
+  // bin width x length x fill height, what a core sampler gives). Set: the built-in deposition pours
+  // with reduced inter-particle friction until the bed reaches it within 1 %, then restores the
+  // study's friction and settles (docs/builtin-dem.md, "Soil deposition and reuse"); unset: the
+  // plain gravity pour.
+  std::optional<double> bulk_density_kg_m3;
   // The DEM backend that deposits the settled soil (soil.deposition.backend, a name of the backend
   // registry, study/backend_capabilities.hpp): every DEM backend starts from that one settled soil
   // (the backend-neutral file of adapter/settled_soil.hpp).

@@ -5,15 +5,26 @@
 // Contract
 // - Bin frame (docs/architecture.md section 10, study.hpp), metres: origin at a bottom corner, x in [0, W],
 //   y up from the floor y = 0, z in [0, L]. Walls are planes (floor and four sides, open top) of the study's bin material.
-// - Deposition: particles (diameters uniform in [d_min, d_max], seed soil.deposition_seed) are
-//   rained in four stages from the bottom up, one per layer thickness of the study (the paper
-//   deposits the upper 30 mm in 10 mm layers), each stage settling under gravity until the total
-//   kinetic energy is below soil.settle_kinetic_energy_J (or its time cap, reported). The step is
-//   the study's or a tenth of the stiffest spring's critical step, whichever is larger. Particles whose
-//   centre ends above the fill height are removed; the rest are tagged by the depth of their centre
-//   below the fill height with the layer (and that layer's material) covering that depth, and settle
-//   once more. The result carries its settling figures: stages = layers + 1 (the final settling),
-//   those that hit the cap, the final total kinetic energy, surface height and packing fraction.
+// - Deposition (docs/builtin-dem.md, "Soil deposition and reuse"): a gravity pour as LIGGGHTS'
+//   insert/pack deposits. Each layer (paper Section 2.9; the paper deposits the upper 30 mm in 10 mm
+//   layers) gets enough particles (diameters uniform in [d_min, d_max], seed soil.deposition_seed) to
+//   fill its height range at a solid fraction of 0.64, created at random non-overlapping positions in
+//   a slab 3.2 times that range (solid fraction 0.2), the slabs stacked from the deepest layer up,
+//   with the layer's own material and contact laws. They fall as one rain, undamped, and settle until
+//   the total kinetic energy has stayed below soil.settle_kinetic_energy_J for three checks; a
+//   background damping (the settling aid) starts only 0.5 s after the rain has landed, on a pack
+//   that is still ringing. The step is the study's or a tenth of the stiffest spring's critical
+//   step, whichever is larger. Particles whose centre ends above the fill height are removed; the
+//   rest are tagged by the depth of their centre below the fill height with the layer (and that
+//   layer's material) covering that depth, and settle once more. The result carries its settling
+//   figures: stages = 2 (the pour and the final settling), those that hit their cap, the final total
+//   kinetic energy, surface height, packing fraction, bulk density and coordination number.
+// - With soil.bulk_density_kg_m3 (kg/m^3) the density protocol: the plain pour, then pours with the
+//   inter-particle static and rolling friction times f in [0, 1) (walls keep theirs), f found by
+//   regula falsi until the bed's bulk density is within 1 % of the target (at most 8 pours), the
+//   study's friction restored (a new simulation from the particles at rest) and the bed settled.
+//   A target looser than the plain pour or denser than the frictionless pour by more than 1 %, or
+//   not reached in 8 pours, throws std::runtime_error naming the key and the densities.
 #pragma once
 
 #include "demfem/adapter/settled_soil.hpp"
@@ -43,18 +54,18 @@ int layerAt(const study::Soil& soil, double y);
 // Mean particle volume (m^3) of the soil's size distribution (radii uniform between the diameter
 // bounds' halves).
 double meanParticleVolume(const study::Soil& soil);
-// Particles a deposition of `soil` settles to, estimated from the bin volume below the fill height,
-// the packing each stage is sized with and the mean particle volume (the quick bin: within 5 % of
-// the deposited count).
+// Particles the pour of `soil` inserts below the fill height (its solid fraction 0.64 of the bin
+// volume below the fill over the mean particle volume): an upper bound of the settled count (the
+// plain pour keeps about 0.89 of it, the frictionless pour about 0.95).
 std::size_t estimatedParticleCount(const study::Soil& soil);
 
-// Progress of depositSoil: the fraction done (each stage and the final settling counted by its
-// simulated-time cap, so an upper bound on what is left) and, at the end of each stage, its
-// summary line (empty otherwise).
+// Progress of depositSoil: the fraction done of the current pour (the pour and the final settling
+// counted by their simulated-time caps, so an upper bound on what is left) and, at the end of each
+// phase, its summary line (empty otherwise; the density protocol prefixes the pour's number).
 using DepositProgress = std::function<void(double fraction, const std::string& stage_line)>;
 
 // Deposits and settles the soil of `study` (deterministic for its seed and `threads`; the soil
-// records both). `progress` may be empty.
+// records both). `progress` may be empty. `report` counts the steps of every pour.
 adapter::SettledSoil depositSoil(const study::Study& study, int threads, DepositReport& report, const DepositProgress& progress);
 
 // Adds the settled particles to `sim` with their layer materials, in spatial order (cells of one
