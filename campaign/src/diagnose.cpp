@@ -431,6 +431,32 @@ double errorPercent(const std::vector<Residual>& residuals) {
   return n > 0 ? std::sqrt(sum / n) : 0.0;
 }
 
+namespace {
+
+// The widest factor by which a catalogue cause moves a weight's steady load-cell force or
+// deformation (the sensor gains' range, 0.7-1.4, and the clamp's, docs/diagnosis.md): a recording
+// further off than kImpossibleFactor is a unit mistake or another tool, never a discrepancy.
+constexpr double kImpossibleFactor = 3.0;
+
+// Refuses weight recordings no model of the catalogue could produce (docs/reliability.md, "Inputs
+// checked against physics"), naming their files, the quantity and the factor.
+void refuseImpossible(const analysis::Signatures& signatures, const std::vector<analysis::Recording>& recordings) {
+  for (const analysis::WeightDropSignature& w : signatures.weight_drops) {
+    for (const auto& [name, ratio] : {std::pair<std::string, double>{"steady load-cell force", w.force_ratio.value},
+                                      {"steady deformation", w.deformation_ratio.value}}) {
+      if (!std::isfinite(ratio) || (ratio >= 1 / kImpossibleFactor && ratio <= kImpossibleFactor)) continue;
+      std::string files;
+      for (const analysis::Recording& r : recordings)
+        if (r.key == w.key) files += (files.empty() ? "" : ", ") + r.sidecar_path.string();
+      throw ArgumentError(files + ": the measured " + name + " of " + w.key.title() + " is " + number(ratio) +
+                          " times the model's, beyond the factor " + number(kImpossibleFactor) +
+                          " any cause of the catalogue can explain: check the sidecars' mass_kg and calibration factors");
+    }
+  }
+}
+
+}  // namespace
+
 Diagnosis diagnose(const ordered_json& study, const std::string& origin, const std::vector<analysis::Recording>& recordings, Model& model,
                    const DiagnosisSettings& given) {
   const auto start = Clock::now();
@@ -457,6 +483,7 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   if (settings.on_stage && settings.scatter_seeds > 1) settings.on_stage("the model's seed scatter");
   d.seed_scatter = seedScatter(study, origin, recordings, model, whole_stroke, settings.scatter_seeds);
   d.signatures = analysis::signaturesOf(analysis::compare(recordings, d.nominal_runs, settings.calibration.objective.analysis), settings.signatures);
+  refuseImpossible(d.signatures, recordings);
   for (const Cause* c : causes)
     d.considered.push_back({c->id, c->description, c->expected_signature, c->judged_on, c->match(d.signatures, settings.tolerance)});
 

@@ -2,6 +2,8 @@
 // or answered (docs/reliability.md, "Inputs checked against physics").
 #include "process.hpp"
 
+#include "../campaign/weight_drop_fixture.hpp"
+
 #include <catch2/catch.hpp>
 
 using namespace demfem::testing;
@@ -55,5 +57,28 @@ TEST_CASE("a depth given in metres or a weight of 1e300 kg is refused by evaluat
     CHECK(p.err().find("/" + key) != std::string::npos);
     CHECK_FALSE(fs::exists(dir / "out" / "report.md"));
   }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("diagnose refuses weight recordings whose mass is given in grams, naming the files, instead of a verdict", "[apps]") {
+  const fs::path dir = freshDir("implausible-grams");
+  fs::create_directories(dir / "recs");
+  demfem::campaign::test::writeRecordings(dir / "recs", {0.05, 0.1}, 1, {});
+  for (const auto& entry : fs::directory_iterator(dir / "recs")) {
+    if (entry.path().extension() != ".json") continue;
+    nlohmann::json sidecar = nlohmann::json::parse(readText(entry.path()));
+    sidecar["mass_kg"] = sidecar["mass_kg"].get<double>() * 1000;  // grams written as kilograms
+    std::ofstream(entry.path()) << sidecar.dump(2) << "\n";
+  }
+  Process p({app("demfem"), "diagnose", demfem::campaign::test::fixtureStudyPath().string(), (dir / "recs").string(), "--out",
+             (dir / "out").string(), "--no-plots", "--quiet"},
+            dir / "diagnose");
+  const int status = p.wait(std::chrono::seconds(240));
+  INFO(p.err());
+  CHECK(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK(p.err().find("w0.05_r1.json") != std::string::npos);
+  CHECK(p.err().find("times the model's") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "out" / "report.md"));
   fs::remove_all(dir);
 }
