@@ -433,10 +433,10 @@ double errorPercent(const std::vector<Residual>& residuals) {
 
 namespace {
 
-// The widest factor by which a catalogue cause moves a weight's steady load-cell force or
+// Beyond the widest factor by which a catalogue cause moves a weight's steady load-cell force or
 // deformation (the sensor gains' range, 0.7-1.4, and the clamp's, docs/diagnosis.md): a recording
 // further off than kImpossibleFactor is a unit mistake or another tool, never a discrepancy.
-constexpr double kImpossibleFactor = 3.0;
+constexpr double kImpossibleFactor = 5.0;
 
 // Refuses weight recordings no model of the catalogue could produce (docs/reliability.md, "Inputs
 // checked against physics"), naming their files, the quantity and the factor.
