@@ -114,9 +114,15 @@ Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t see
       soil = liggghts::depositSoil(s);
     } else {
       builtin::DepositReport report;
-      soil = builtin::depositSoil(s, threads, report, [](double fraction, const std::string& line) {
-        if (!line.empty()) std::cerr << "  " << line << '\n';
-        else std::cerr << "  " << static_cast<int>(100 * fraction) << " %\r" << std::flush;
+      int shown = -1;  // the last percentage shown
+      soil = builtin::depositSoil(s, threads, report, [&shown](double fraction, const std::string& line) {
+        const int percent = static_cast<int>(100 * fraction);
+        if (!line.empty()) {
+          std::cerr << "  " << line << '\n';
+        } else if (percent >= shown + 5) {
+          shown = percent;
+          std::cerr << "  " << percent << " %\r" << std::flush;
+        }
       });
     }
     bed.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
