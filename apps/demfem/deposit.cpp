@@ -45,7 +45,11 @@ void printSoil(const std::filesystem::path& file, const adapter::SettledSoil& so
   const std::string reason = adapter::unsettledReason(s);
   std::cout << file.string() << ": " << soil.particles.size() << " particles deposited by "
             << soil.backend << " (seed " << soil.seed << "), surface at "
-            << s.surface_height_m * 1e3 << " mm, packing fraction " << s.packing_fraction << ", kinetic energy "
+            << s.surface_height_m * 1e3 << " mm, packing fraction " << s.packing_fraction << ", bulk density "
+            << s.bulk_density_kg_m3 << " kg/m3"
+            << (s.target_bulk_density_kg_m3 > 0 ? " (stated " : "");
+  if (s.target_bulk_density_kg_m3 > 0) std::cout << s.target_bulk_density_kg_m3 << " kg/m3)";
+  std::cout << ", coordination number " << s.coordination_number << ", kinetic energy "
             << s.kinetic_energy_J << " J (threshold " << s.threshold_J << " J), " << s.stages_capped << " of "
             << s.stages << " stages capped" << (reason.empty() ? "" : "; NOT SETTLED: " + reason) << '\n';
 }

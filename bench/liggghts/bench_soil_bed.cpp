@@ -44,6 +44,8 @@ struct Bed {
   double wall_s = 0;  // NaN when the soil file was reused
   bool settled = false;
   double rest_rms_speed_mm_s = std::nan(""), rest_max_displacement_mm = std::nan("");  // --rest-s
+  double rest_late_max_displacement_mm = std::nan("");  // over the second half of the rest only
+  std::size_t rest_moved_1mm = 0;                        // particles displaced more than 1 mm
 };
 
 // Leaves the bed alone for `rest_s` of simulated time (the study's laws, the run's step) and
@@ -58,16 +60,23 @@ void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double
   for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
   const long steps = std::lround(rest_s / sim.timeStep());
   const long chunk = std::max(1L, steps / 20);
+  std::vector<builtin::Vec3> half;
   for (long done = 0; done < steps; done += chunk) {
+    if (half.empty() && done >= steps / 2)
+      for (std::size_t i = 0; i < start.size(); ++i) half.push_back(sim.particle(i).x);
     sim.run(std::min(chunk, steps - done));
     std::cerr << "  rest: " << sim.time() << " s of " << rest_s << " s\r" << std::flush;
   }
-  double v2 = 0, max_d = 0;
+  double v2 = 0, max_d = 0, late_d = 0;
   for (std::size_t i = 0; i < start.size(); ++i) {
     const auto p = sim.particle(i);
     v2 += p.v[0] * p.v[0] + p.v[1] * p.v[1] + p.v[2] * p.v[2];
-    max_d = std::max(max_d, std::hypot(p.x[0] - start[i][0], p.x[1] - start[i][1], p.x[2] - start[i][2]));
+    const double d = std::hypot(p.x[0] - start[i][0], p.x[1] - start[i][1], p.x[2] - start[i][2]);
+    max_d = std::max(max_d, d);
+    if (d > 1e-3) ++bed.rest_moved_1mm;
+    if (!half.empty()) late_d = std::max(late_d, std::hypot(p.x[0] - half[i][0], p.x[1] - half[i][1], p.x[2] - half[i][2]));
   }
+  bed.rest_late_max_displacement_mm = 1e3 * late_d;
   bed.rest_rms_speed_mm_s = 1e3 * std::sqrt(v2 / static_cast<double>(start.size()));
   bed.rest_max_displacement_mm = 1e3 * max_d;
   std::cerr << '\n';
@@ -105,9 +114,15 @@ Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t see
       soil = liggghts::depositSoil(s);
     } else {
       builtin::DepositReport report;
-      soil = builtin::depositSoil(s, threads, report, [](double fraction, const std::string& line) {
-        if (!line.empty()) std::cerr << "  " << line << '\n';
-        else std::cerr << "  " << static_cast<int>(100 * fraction) << " %\r" << std::flush;
+      int shown = -1;  // the last percentage shown
+      soil = builtin::depositSoil(s, threads, report, [&shown](double fraction, const std::string& line) {
+        const int percent = static_cast<int>(100 * fraction);
+        if (!line.empty()) {
+          std::cerr << "  " << line << '\n';
+        } else if (percent >= shown + 5) {
+          shown = percent;
+          std::cerr << "  " << percent << " %\r" << std::flush;
+        }
       });
     }
     bed.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -163,8 +178,10 @@ int main(int argc, char** argv) {
                     static_cast<unsigned long long>(b.seed), b.particles, b.packing_fraction, b.bulk_density_kg_m3,
                     b.coordination_number, b.surface_mm, b.wall_s, b.settled ? "yes" : "NO");
         if (!std::isnan(b.rest_rms_speed_mm_s))
-          std::printf("  after %.2f s alone: rms speed %.4f mm/s, largest displacement %.4f mm", rest_s,
-                      b.rest_rms_speed_mm_s, b.rest_max_displacement_mm);
+          std::printf("  after %.2f s alone: rms speed %.4f mm/s, largest displacement %.4f mm (%zu particles > 1 mm; "
+                      "largest over the second half %.4f mm)",
+                      rest_s, b.rest_rms_speed_mm_s, b.rest_max_displacement_mm, b.rest_moved_1mm,
+                      b.rest_late_max_displacement_mm);
         std::printf("\n");
       }
     }
@@ -180,7 +197,10 @@ int main(int argc, char** argv) {
                       {"rest_s", rest_s},
                       {"rest_rms_speed_mm_s", std::isnan(b.rest_rms_speed_mm_s) ? nlohmann::json() : nlohmann::json(b.rest_rms_speed_mm_s)},
                       {"rest_max_displacement_mm",
-                       std::isnan(b.rest_max_displacement_mm) ? nlohmann::json() : nlohmann::json(b.rest_max_displacement_mm)}});
+                       std::isnan(b.rest_max_displacement_mm) ? nlohmann::json() : nlohmann::json(b.rest_max_displacement_mm)},
+                      {"rest_second_half_max_displacement_mm",
+                       std::isnan(b.rest_late_max_displacement_mm) ? nlohmann::json() : nlohmann::json(b.rest_late_max_displacement_mm)},
+                      {"rest_particles_moved_over_1mm", b.rest_moved_1mm}});
     report["runs"] = runs;
     std::map<std::string, std::map<std::string, Stats>> summary;
     for (const auto& backend : backends) {

@@ -23,12 +23,12 @@ namespace demfem::builtin {
 
 namespace {
 // The gravity pour (docs/builtin-dem.md, "Soil deposition and reuse"), as LIGGGHTS' insert/pack
-// deposits (backends/liggghts input deck): each stage creates its particles at random
-// non-overlapping positions in a region above the current surface at kInsertSolidFraction, enough of
-// them to fill its layer at kPouredSolidFraction (random close packing: a frictional pour settles
-// looser, so the surface ends above the fill height and the excess is trimmed).
+// deposits (docs/liggghts-backend.md): each layer's particles are created at random non-overlapping
+// positions in a slab above the one below at kInsertSolidFraction, enough of them to fill the layer
+// at kPouredSolidFraction (random close packing: a frictional pour settles looser, so the surface
+// ends above the fill height and the excess is trimmed).
 constexpr double kInsertSolidFraction = 0.20;   // LIGGGHTS' volumefraction_region of the same pour
-constexpr double kPouredSolidFraction = 0.64;   // solid fraction each stage's count is sized with
+constexpr double kPouredSolidFraction = 0.64;   // solid fraction each layer's count is sized with
 constexpr int kInsertAttempts = 4000;           // random positions tried for a particle before the region grows
 constexpr double kRegionGrowth = 1.1;           // the region's height grows by this factor when full
 constexpr double kLandingFallTimes = 2.0;       // undamped for this many fall times of the highest particle
