@@ -258,6 +258,7 @@ class Detectability {
         const Eigen::MatrixXd JtJ_inv = (J.transpose() * J).inverse();
         Channel ch;
         ch.projection = JtJ_inv * J.transpose();
+        // std_error holds one recording's variance until the end of the constructor.
         for (int q = 0; q < 3; ++q) ch.std_error(q) = std::pow(sigma[static_cast<std::size_t>(c)], 2) * JtJ_inv(kQuantities[q], kQuantities[q]);
         channels_.push_back(std::move(ch));
       }
@@ -299,7 +300,6 @@ class Detectability {
     for (std::size_t k = 0; k < changes.size(); ++k) z = std::max(z, changes[k].cwiseAbs().cwiseQuotient(channels_[k].std_error).maxCoeff());
     return z;
   }
-
 
   double largestZ(const std::vector<Effect>& effects) const { return largestZ(hiddenResponses(hiddenTruth(effects), daq_)); }
 
