@@ -406,7 +406,9 @@ void decide(Diagnosis& d, const DiagnosisSettings& s) {
     }
   d.verdict = Verdict::UnexplainedDiscrepancy;
   const std::string best = d.models.empty() ? std::string("no cause fitted") : "best " + d.models.front().id() + ": " + notNamed(d.models.front(), s);
-  d.reason = significantText(d.localisation) + "; the other quantities within noise; no cause or pair of the catalogue explains it (" + best + ")";
+  const bool others_within = std::any_of(d.localisation.begin(), d.localisation.end(), [](const Localisation& l) { return !l.significant; });
+  d.reason = significantText(d.localisation) + (others_within ? "; the other quantities within noise" : "") +
+             "; no cause or pair of the catalogue explains it (" + best + ")";
 }
 
 }  // namespace
