@@ -97,6 +97,7 @@ void addDiagnoseCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_flag("--no-pairs", o->no_pairs, "Do not try two causes at once");
+  cmd->add_flag("--all-pairs", s.all_pairs, "Pair the best single causes with every cause, not only those whose single fit has ln B > 0");
   cmd->add_option("--min-error-percent", o->retired_min_error_percent, "Retired (the residual test replaces it); accepted without effect");
   cmd->add_option("--min-delta-bic", o->retired_min_delta_bic, "Retired (the Bayes factor replaces it); accepted without effect");
   addOptimiserOptions(*cmd, s.calibration, "Optimiser starts per fit");

@@ -1,7 +1,9 @@
 // Diagnosis benchmark (docs/diagnosis.md, section Cost): the wall and processor time of
 // - a weight-drop diagnosis of the paper's PMMA tool (0.5 and 1 kg, two repeats each) on recordings
 //   the project's modal model made with a compliant clamp (k_theta = --clamp-ei-l times the free
-//   part's EI/L) and DAQ noise, every cause of the catalogue and the pairs fitted (default);
+//   part's EI/L; --force-gain G: and a load cell reading G times the force, two causes at once) and
+//   DAQ noise, every cause of the catalogue fitted, and the pairs when a single cause leaves a
+//   significant residual (default);
 // - with --soil-bin: a soil diagnosis of the small bin (tests/campaign/liggghts_layered_bin.hpp:
 //   about 2,570 particles, 200 mm stroke, depths 20, 40, 55 mm) on recordings LIGGGHTS itself made
 //   from the deck kept with the tests, the hidden effect the two layers (friction 0.2 above, 0.9
@@ -69,11 +71,12 @@ std::string verdictOf(const campaign::Diagnosis& d) {
   return text;
 }
 
-nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, int jobs, std::FILE* table) {
+nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, double force_gain, int jobs, std::FILE* table) {
   const nlohmann::ordered_json study = cli::readJsonFile(study_file);
   nlohmann::ordered_json truth = study;
   const double k_true = clamp_ei_l * freePartEiOverL(study["tools"][0]);
   truth["tools"][0]["constraints"]["clamp_rotational_stiffness_Nm_per_rad"] = k_true;
+  if (force_gain != 1) truth["tools"][0]["sensors"]["force_gain"] = force_gain;
   const fs::path dir = fs::temp_directory_path() / ("demfem-bench-diagnose-" + std::to_string(getpid()));
   fs::create_directories(dir / "recordings");
   std::fprintf(stderr, "writing the recordings (k_theta = %.4g N m/rad)\n", k_true);
@@ -101,6 +104,7 @@ nlohmann::json weightDrop(const std::string& study_file, double clamp_ei_l, int 
   std::fprintf(table, "verdict: %s (%s)\n", verdictOf(d).c_str(), d.reason.c_str());
   return {{"study", study_file},
           {"clamp_true_Nm_per_rad", k_true},
+          {"force_gain_true", force_gain},
           {"jobs", jobs},
           {"recordings_s", recordings_s},
           {"diagnosis_wall_s", wall_s},
@@ -175,12 +179,15 @@ int main(int argc, char** argv) {
   CLI::App app{"demfem-bench-diagnose: cost of a diagnosis: the paper tool with compliant-clamp recordings, or (--soil-bin) the small soil bin against LIGGGHTS"};
   app.name("demfem-bench-diagnose");
   std::string study_file = std::string(DEMFEM_SOURCE_DIR) + "/studies/weight_drop_1kg.json";
-  double clamp_ei_l = 3.0;
+  double clamp_ei_l = 3.0, force_gain = 1.0;
   int jobs = 2;
   bool soil_bin = false;
   SoilOptions soil;
   app.add_option("--study", study_file, "weight-drop study of the tool")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--clamp-ei-l", clamp_ei_l, "the recordings' clamp spring in units of EI/L")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--force-gain", force_gain, "the recordings' load-cell gain besides the clamp spring (not 1: two causes, the pairs run)")
+      ->check(CLI::Range(0.7, 1.4))
+      ->capture_default_str();
   app.add_option("--jobs", jobs, "cases run concurrently (with --soil-bin also LIGGGHTS processes)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_flag("--soil-bin", soil_bin, "The soil diagnosis of the small bin against LIGGGHTS instead of the weight drop");
   app.add_flag("--ci-bin", soil.ci_bin, "--soil-bin: the physics test's bin (100 x 140 mm, 40 mm stroke) instead of the small bin");
@@ -196,7 +203,7 @@ int main(int argc, char** argv) {
   app.callback([&] {
     soil.jobs = jobs;
     cli::writeJson(json_target, soil_bin ? soilBin(soil, cli::textStream(json_target))
-                                         : weightDrop(study_file, clamp_ei_l, jobs, cli::textStream(json_target)));
+                                         : weightDrop(study_file, clamp_ei_l, force_gain, jobs, cli::textStream(json_target)));
   });
   return cli::runApp(app, argc, argv);
 }

@@ -329,14 +329,25 @@ bool redundantPair(const Cause& a, const Cause& b, const Context& c) {
   return std::includes(pa.begin(), pa.end(), pb.begin(), pb.end()) || std::includes(pb.begin(), pb.end(), pa.begin(), pa.end());
 }
 
-// Step 4's pairs: each of the two most probable single causes with every other cause.
-std::vector<ModelFit> fitPairs(const std::vector<ModelFit>& singles, const std::vector<const Cause*>& causes, const Context& c) {
+// Whether `cause` is a pair partner (step 4): with settings.all_pairs every cause, otherwise those
+// whose single fit has evidence above the baseline's (ln B > 0).
+bool partner(const Cause& cause, const std::vector<ModelFit>& singles, const ModelFit& baseline, const Context& c) {
+  if (c.settings.all_pairs) return true;
+  const auto it = std::find_if(singles.begin(), singles.end(), [&](const ModelFit& m) { return m.causes.front() == cause.id; });
+  return it != singles.end() && it->log_evidence > baseline.log_evidence;
+}
+
+// Step 4's pairs: each of the two most probable single causes with every partner.
+std::vector<ModelFit> fitPairs(const std::vector<ModelFit>& singles, const ModelFit& baseline, const std::vector<const Cause*>& causes,
+                               const Context& c) {
   std::vector<ModelFit> out;
   std::set<std::set<std::string>> done;
   for (std::size_t k = 0; k < std::min<std::size_t>(2, singles.size()); ++k) {
     const Cause& first = findCause(singles[k].causes.front());
     for (const Cause* other : causes) {
-      if (other->id == first.id || !done.insert({first.id, other->id}).second || redundantPair(first, *other, c)) continue;
+      if (other->id == first.id || !partner(*other, singles, baseline, c) || !done.insert({first.id, other->id}).second ||
+          redundantPair(first, *other, c))
+        continue;
       out.push_back(fitModel({&first, other}, c));
     }
   }
@@ -395,7 +406,9 @@ void decide(Diagnosis& d, const DiagnosisSettings& s) {
     }
   d.verdict = Verdict::UnexplainedDiscrepancy;
   const std::string best = d.models.empty() ? std::string("no cause fitted") : "best " + d.models.front().id() + ": " + notNamed(d.models.front(), s);
-  d.reason = significantText(d.localisation) + "; the other quantities within noise; no cause or pair of the catalogue explains it (" + best + ")";
+  const bool others_within = std::any_of(d.localisation.begin(), d.localisation.end(), [](const Localisation& l) { return !l.significant; });
+  d.reason = significantText(d.localisation) + (others_within ? "; the other quantities within noise" : "") +
+             "; no cause or pair of the catalogue explains it (" + best + ")";
 }
 
 }  // namespace
@@ -505,7 +518,7 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   for (const Cause* cause : ordered) d.models.push_back(fitModel({cause}, c));
   posterior(d.baseline, d.models);
   if (settings.pairs && !d.models.empty() && d.models.front().significant > 0) {
-    std::vector<ModelFit> pairs = fitPairs(d.models, causes, c);
+    std::vector<ModelFit> pairs = fitPairs(d.models, d.baseline, causes, c);
     d.models.insert(d.models.end(), pairs.begin(), pairs.end());
     posterior(d.baseline, d.models);
   }

@@ -248,6 +248,7 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
             {"min_gain_percent", settings.min_gain_percent},
             {"min_held_out_folds", settings.min_held_out_folds},
             {"pairs", settings.pairs},
+            {"all_pairs", settings.all_pairs},
             {"scatter_seeds", settings.scatter_seeds}}},
           {"considered", considered},
           {"unjudged", unjudgedJson(d.unjudged)},

@@ -31,7 +31,6 @@
 #include <cmath>
 #include <future>
 #include <map>
-#include <optional>
 #include <mutex>
 
 namespace demfem::campaign {
@@ -122,21 +121,6 @@ std::vector<int> panDofs(const fem::ReducedModel& model, const study::WeightDrop
   return dofs;
 }
 
-// The reduced model of `tool` from its reduction: with a clamp spring, K at the tool's E and
-// k_theta (header comment); without, the reduction as it is (E enters by scaling).
-fem::ReducedModel modelOf(const Reduction& reduction, const study::Tool& tool) {
-  fem::ReducedModel model = reduction.model;
-  const auto& k = tool.constraints.clamp_rotational_stiffness_Nm_per_rad;
-  if (!k) return model;
-  const double e = tool.fem.youngs_Pa / reduction.E_ref_Pa, s = *k / reduction.k_ref_Nm_per_rad;
-  model.K *= e;
-  for (auto& [dof, stiffness] : model.constraints.springs) {
-    model.K(dof, dof) += (s - e) * stiffness;
-    stiffness *= s;
-  }
-  return model;
-}
-
 Eigen::VectorXd weightLoad(const fem::ReducedModel& model, const std::vector<int>& pan, const study::WeightDrop& drop) {
   Eigen::VectorXd load = Eigen::VectorXd::Zero(model.dofCount());
   for (int dof : pan) load(dof) = -drop.mass_kg * fem::kStandardGravity_m_s2 / static_cast<double>(pan.size());  // as fem::simulateWeightDrop
@@ -151,20 +135,23 @@ fem::ReducedModel loadedModel(fem::ReducedModel model, const std::vector<int>& p
 }
 
 // The modal description of the weight's load on `loaded` from its modes and its exact static solution.
-Basis basisOf(const fem::ReducedModel& loaded, const study::Tool& tool, const fem::Modes& modes, const fem::StaticSolution& exact,
-              const Eigen::VectorXd& load) {
+// `model` gives the sensors, the load cell's rows of M and, times `stiffness_scale`, of K: the rows
+// of fixed DOFs, which neither the pan's masses (free DOFs) nor the clamp springs (free DOFs) touch,
+// so the reduction itself serves with the material's scale e (K = e (K_ref - S) + s S, header comment).
+Basis basisOf(const fem::ReducedModel& model, double stiffness_scale, const study::Tool& tool, const fem::Modes& modes,
+              const fem::StaticSolution& exact, const Eigen::VectorXd& load) {
   study::Tool ideal = tool;
   ideal.sensors = {};  // gains are applied to the outputs (integrate)
-  const fem::Sensors sensors(loaded, ideal);
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(loaded.dofCount());
+  const fem::Sensors sensors(model, ideal);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(model.dofCount());
   // Load-cell functional c on the reactions (the sensor is linear in them).
-  Eigen::VectorXd cell = Eigen::VectorXd::Zero(loaded.dofCount());
-  for (int dof : loaded.constraints.fixed_dofs) {
+  Eigen::VectorXd cell = Eigen::VectorXd::Zero(model.dofCount());
+  for (int dof : model.constraints.fixed_dofs) {
     Eigen::VectorXd unit = zero;
     unit(dof) = 1;
     cell(dof) = sensors.read(zero, unit).load_cell_N;
   }
-  const Eigen::RowVectorXd cell_K = cell.transpose() * loaded.K, cell_M = cell.transpose() * loaded.M;
+  const Eigen::RowVectorXd cell_K = stiffness_scale * (cell.transpose() * model.K), cell_M = cell.transpose() * model.M;
   Basis b;
   const fem::SensorReadings exact_reading = sensors.read(exact.displacement, exact.reaction);
   b.residual_deformation_mm = exact_reading.deformation_mm;
@@ -198,17 +185,23 @@ study::WeightDrop withoutAddedMass(study::WeightDrop drop) {
   return drop;
 }
 
-// Rigid clamp: `loaded` is the loaded reduction at E_ref (E enters by scaling, integrate()).
-WeightSolution rigidSolution(const fem::ReducedModel& loaded, const study::WeightDrop& drop) {
-  return {fem::naturalModes(loaded, modeCount(loaded)), fem::solveStatic(loaded, weightLoad(loaded, panDofs(loaded, drop), drop))};
+// Rigid clamp: the loaded reduction at E_ref (E enters by scaling, integrate()).
+WeightSolution rigidSolution(const Reduction& reduction, const study::WeightDrop& drop) {
+  const std::vector<int> pan = panDofs(reduction.model, drop);
+  const fem::ReducedModel loaded = loadedModel(reduction.model, pan, withoutAddedMass(drop));
+  return {fem::naturalModes(loaded, modeCount(loaded)), fem::solveStatic(loaded, weightLoad(loaded, pan, drop))};
 }
 
-// Compliant clamp: `loaded` at the tool's E and k_theta (modelOf), from the weight's spring Ritz basis.
-WeightSolution sprungSolution(const Reduction& reduction, const fem::ReducedModel& loaded, const fem::SpringRitzBasis& ritz,
-                              const study::Tool& tool, const study::WeightDrop& drop) {
-  const double e = tool.fem.youngs_Pa / reduction.E_ref_Pa;
+// The material's scale e = E / E_ref of a compliant clamp's model (header comment).
+double materialScale(const Reduction& reduction, const study::Tool& tool) { return tool.fem.youngs_Pa / reduction.E_ref_Pa; }
+
+// Compliant clamp: at the tool's E and k_theta from the weight's spring Ritz basis (no copy of the
+// reduction: the basis holds what it needs).
+WeightSolution sprungSolution(const Reduction& reduction, const fem::SpringRitzBasis& ritz, const study::Tool& tool, const study::WeightDrop& drop) {
+  const double e = materialScale(reduction, tool);
   const double s = *tool.constraints.clamp_rotational_stiffness_Nm_per_rad / reduction.k_ref_Nm_per_rad;
-  return {ritz.modes(e, s, modeCount(loaded)), ritz.solveStatic(e, s, weightLoad(loaded, panDofs(loaded, drop), drop))};
+  const Eigen::VectorXd load = weightLoad(reduction.model, panDofs(reduction.model, drop), drop);
+  return {ritz.modes(e, s, modeCount(reduction.model)), ritz.solveStatic(e, s, load)};
 }
 
 // The modes with the added mass m_a on the pan rows from those without it, by Rayleigh-Ritz on the
@@ -228,12 +221,13 @@ fem::Modes withAddedMass(const fem::Modes& modes, const std::vector<int>& pan, d
   return out;
 }
 
-// The basis of one weight with its added mass. `loaded` is the model without the added mass: the
-// added mass lies on free pan DOFs, so neither the sensors nor the load-cell rows of M see it; it
-// enters through the modes only.
-Basis weightBasis(const fem::ReducedModel& loaded, const WeightSolution& solution, const study::Tool& tool, const study::WeightDrop& drop) {
-  const std::vector<int> pan = panDofs(loaded, drop);
-  return basisOf(loaded, tool, withAddedMass(solution.modes, pan, drop.added_mass_kg), solution.exact, weightLoad(loaded, pan, drop));
+// The basis of one weight with its added mass, on the reduction (basisOf): the added mass enters
+// through the modes only.
+Basis weightBasis(const fem::ReducedModel& reduction, double stiffness_scale, const WeightSolution& solution, const study::Tool& tool,
+                  const study::WeightDrop& drop) {
+  const std::vector<int> pan = panDofs(reduction, drop);
+  return basisOf(reduction, stiffness_scale, tool, withAddedMass(solution.modes, pan, drop.added_mass_kg), solution.exact,
+                 weightLoad(reduction, pan, drop));
 }
 
 // Eq (5) and (10) per mode for the step load (fem::ModalRecursion); returns the recording's columns.
@@ -288,26 +282,19 @@ analysis::Recording WeightDropModel::run(const study::Study& study, const analys
   const std::string weight_key = tool_key + "|" + nlohmann::json(drop.mass_kg).dump() + "|" + nlohmann::json(drop.pan_rows_from_tip_m).dump();
   std::shared_ptr<const WeightSolution> solution;
   std::string solution_key = weight_key;
-  // The loaded model without the added mass (at the tool's E and k_theta with a clamp spring), built
-  // once per run when a solution or basis is missing.
-  std::optional<fem::ReducedModel> loaded_model;
-  const auto loaded = [&]() -> const fem::ReducedModel& {
-    if (!loaded_model)
-      loaded_model = loadedModel(clamp ? modelOf(*reduction, tool) : reduction->model, panDofs(reduction->model, drop), withoutAddedMass(drop));
-    return *loaded_model;
-  };
   if (clamp) {
     const auto ritz = impl_->ritz.get(weight_key, [&] {
       const fem::ReducedModel loaded = loadedModel(reduction->model, panDofs(reduction->model, drop), withoutAddedMass(drop));
       return fem::SpringRitzBasis(loaded, modeCount(loaded));
     });
     solution_key += "|" + nlohmann::json(tool.fem.youngs_Pa).dump() + "|" + nlohmann::json(*clamp).dump();
-    solution = impl_->solutions.get(solution_key, [&] { return sprungSolution(*reduction, loaded(), *ritz, tool, drop); });
+    solution = impl_->solutions.get(solution_key, [&] { return sprungSolution(*reduction, *ritz, tool, drop); });
   } else {
-    solution = impl_->solutions.get(solution_key, [&] { return rigidSolution(loaded(), drop); });
+    solution = impl_->solutions.get(solution_key, [&] { return rigidSolution(*reduction, drop); });
   }
+  const double stiffness_scale = clamp ? materialScale(*reduction, tool) : 1.0;  // a rigid basis is at E_ref (integrate scales it)
   const auto basis = impl_->bases.get(solution_key + "|" + nlohmann::json(drop.added_mass_kg).dump(),
-                                      [&] { return weightBasis(loaded(), *solution, tool, drop); });
+                                      [&] { return weightBasis(reduction->model, stiffness_scale, *solution, tool, drop); });
   const auto steps = static_cast<long>(std::llround(drop.duration_s / study.fem.dt_s));
   const double scale = clamp ? 1.0 : tool.fem.youngs_Pa / reduction->E_ref_Pa;  // a sprung basis is at the tool's E
   analysis::Recording rec = integrate(*basis, scale, tool, study.fem.dt_s, steps);

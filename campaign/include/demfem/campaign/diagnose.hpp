@@ -17,8 +17,9 @@
 //  4. Models: every cause of the domains (or settings.causes) fitted together with the baseline's
 //     parameters (a cause's own range replaces the baseline's for the same pointer), on all cases and
 //     per fold as in step 2. When the best single cause (by evidence) still leaves a significant
-//     residual, each of the two best single causes paired with every other cause (pairs whose
-//     parameters one cause already holds are skipped). Each model's Laplace evidence:
+//     residual, each of the two best single causes paired with every other cause whose single fit
+//     has ln B > 0 over the baseline (settings.all_pairs: every other cause; pairs whose parameters
+//     one cause already holds are skipped). Each model's Laplace evidence:
 //     ln Z = -chi2 / 2 + sum over the eigen directions of J^T J of min(0, ln sqrt(2 pi / lambda)),
 //     the priors uniform in the optimiser coordinates (uniform or log-uniform over each range,
 //     parameters.hpp), up to a constant common to all models; posterior probabilities
@@ -87,6 +88,7 @@ struct DiagnosisSettings {
   double min_gain_percent = 10.0;            // held-out chi2 cut a named model must reach (step 5)
   int min_held_out_folds = 2;                // when a split identifies it: held-out cases it must predict
   bool pairs = true;                         // try two causes at once (step 4)
+  bool all_pairs = false;                    // pair with every cause, not only those with ln B > 0 alone
   int scatter_seeds = 3;  // soil-bin cases: deposition seeds of the baseline's seed scatter (1: none)
   std::function<void(const std::string&)> on_stage;  // "fitting clamp_compliance, fold 2/2", for progress
 };
