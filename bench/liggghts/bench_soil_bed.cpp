@@ -1,4 +1,4 @@
-// Soil-bed benchmark (issue 53): the built-in DEM's gravity pour against LIGGGHTS' own deposition
+// Soil-bed benchmark: the built-in DEM's gravity pour against LIGGGHTS' own deposition
 // (insert/pack) of the same study, several seeds: particle count, packing fraction, bulk density
 // and mean coordination number of each settled soil (adapter/settled_soil.hpp: the figures are
 // computed from the soil files alike for both engines), their mean and standard deviation over the
@@ -7,7 +7,7 @@
 // numbers.
 // --rest-s T: each built-in bed is then left alone for T s of simulated time with the study's laws
 // at the run's step (no settling aid), and its rms particle speed at the end and largest particle
-// displacement are reported (issue 53's bed at rest: below 0.3 mm/s and 1 mm after 2 s).
+// displacement are reported (a bed at rest: below 0.3 mm/s and 1 mm after 2 s).
 //
 // Soils are kept by hash in --soil-dir (a scratch directory: default a new one under the system's
 // temporary directory) and reused unless --force: LIGGGHTS' soils do not change when the built-in
