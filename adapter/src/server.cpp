@@ -104,6 +104,23 @@ std::filesystem::path Server::checkpointPath(const std::string& name) const {
   return options_.checkpoint_dir / name;
 }
 
+namespace {
+
+// The largest node coordinate a peer may set, in metres: far beyond any soil bin, far below where a
+// cell index or a distance overflows (docs/reliability.md, "Inputs checked against physics").
+constexpr double kMaxCoordinate_m = 1e3;
+
+void checkPositions(const NodeArray& xyz) {
+  for (std::size_t i = 0; i < xyz.size(); ++i) {
+    if (std::abs(xyz[i]) <= kMaxCoordinate_m) continue;
+    throw CouplingError(ErrorCode::BadRequest, "node " + std::to_string(i / 3) + ": coordinate " + "xyz"[i % 3] + " = " +
+                                                   std::to_string(xyz[i]) + " m is outside +-" + std::to_string(kMaxCoordinate_m) +
+                                                   " m or not a number (nothing was moved)");
+  }
+}
+
+}  // namespace
+
 void Server::checkDuration(double duration_s) const {
   if (!(duration_s <= options_.max_simulate_s))
     throw CouplingError(ErrorCode::BadRequest,
@@ -129,6 +146,7 @@ p::ReplyBody Server::serveCall(const p::Request& request) {
             return p::NodeArrayReply{r.geometry, api_.nodeForces(r.geometry, wire::toApi(r.mode))};
           },
           [&](const p::SetNodePositions& r) -> p::ReplyBody {
+            checkPositions(r.xyz);
             api_.setNodePositions(r.geometry, r.xyz);
             return p::Ack{};
           },
@@ -139,6 +157,7 @@ p::ReplyBody Server::serveCall(const p::Request& request) {
           },
           [&](const p::Advance& r) -> p::ReplyBody {
             checkDuration(r.duration_s);
+            checkPositions(r.xyz);
             NodeArray forces = api_.advance(r.geometry, r.xyz, r.duration_s, wire::toApi(r.mode), {});
             return p::AdvanceReply{api_.time(), r.geometry, std::move(forces)};
           },

@@ -139,6 +139,28 @@ TEST_CASE("server: simulate beyond the stated limit is refused and nothing is si
   CHECK(std::get<p::TimeReply>(ok.body).time_s == Approx(0.5).epsilon(1e-12));
 }
 
+TEST_CASE("server: node positions beyond 1 km or not a number are refused and nothing moves", "[adapter]") {
+  auto api = backend();
+  Server server(*api, ServerOptions{});
+  const std::string token = hello(server, 1);
+  std::uint64_t seq = 2;
+  const NodeArray before = api->nodePositions("tool");
+  REQUIRE(before.size() >= 3);
+  for (const double bad : {1e300, -2e3, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    INFO("coordinate " << bad);
+    NodeArray xyz = before;
+    xyz[xyz.size() - 2] = bad;
+    const p::Reply set = ask(server, {seq++, p::SetNodePositions{"tool", xyz}, token});
+    CHECK(errorCode(set) == p::WireError::BadRequest);
+    // The codec already refuses a value that is not finite; the server the finite ones out of range.
+    CHECK_THAT(errorText(set), Catch::Contains(std::isfinite(bad) ? "coordinate y" : "not finite"));
+    const p::Reply advance = ask(server, {seq++, p::Advance{"tool", xyz, 0.001, p::ForceMode::IntervalMean}, token});
+    CHECK(errorCode(advance) == p::WireError::BadRequest);
+  }
+  CHECK(api->nodePositions("tool") == before);
+  CHECK(api->time() == 0.0);
+}
+
 TEST_CASE("the test backends refuse a simulate that would wrap their time", "[adapter]") {
   auto api = backend();  // dt = 1e-5 s: 2^53 steps are 9e10 s
   for (const double duration : {1e20, 1e11, std::numeric_limits<double>::infinity()}) {

@@ -7,6 +7,7 @@
 
 #include <numbers>
 #include <string>
+#include <utility>
 
 namespace demfem::support {
 
@@ -29,6 +30,20 @@ inline void useTopAndDeepLayers(study::Soil& soil, double top_bottom_m) {
   soil.materials = {{"top", 2600, 1.12e10, 0.3, 5.88e5}, {"deep", 2600, 1.12e10, 0.3, 5.88e5}, {"steel", 7933, 7.9e10, 0.3, 0}};
   soil.bin_material = "steel";
   soil.layers = {{"top", 0, top_bottom_m}, {"deep", top_bottom_m, soil.fill_height_m}};
+}
+
+// The built-in backend tests' bin: 120 x 120 mm with 40 mm of soil, top and deep layers split at
+// 10 mm depth, quick.json-like laws between every pair of layers and with the steel tool, settled
+// below 1e-5 J.
+inline study::Study twoLayerTestBin(const std::string& name, study::StudyKind kind) {
+  study::Study s = binStudy(name, kind, 0.12, 0.12, 0.04);
+  auto& soil = s.soil;
+  useTopAndDeepLayers(soil, 0.01);
+  for (const auto& [a, b] : {std::pair{"top", "top"}, {"top", "deep"}, {"deep", "deep"}})
+    soil.interactions.push_back({a, b, 0.6, 0.3, 0.1, 3e4});
+  for (const char* m : {"top", "deep"}) soil.interactions.push_back({m, "steel", 0.6, 0.3, 0.1, 0});
+  soil.settle_kinetic_energy_J = 1e-5;
+  return s;
 }
 
 // The built-in DEM at 0.1 of the stiffest spring's critical step on one thread (two threads of one

@@ -25,13 +25,7 @@ namespace {
 
 // A 120 x 120 mm bin with 40 mm of soil (two layers), a 40 x 100 x 4 mm plate at 10 mm depth.
 study::Study smallStudy() {
-  study::Study s = support::binStudy("builtin-small", study::StudyKind::Coupled, 0.12, 0.12, 0.04);
-  auto& soil = s.soil;
-  support::useTopAndDeepLayers(soil, 0.01);
-  for (const auto& [a, b] : {std::pair{"top", "top"}, {"top", "deep"}, {"deep", "deep"}})
-    soil.interactions.push_back({a, b, 0.6, 0.3, 0.1, 3e4});
-  for (const char* m : {"top", "deep"}) soil.interactions.push_back({m, "steel", 0.6, 0.3, 0.1, 0});
-  soil.settle_kinetic_energy_J = 1e-5;
+  study::Study s = support::twoLayerTestBin("builtin-small", study::StudyKind::Coupled);
   study::Tool tool;
   tool.dem_material = "steel";
   support::usePlate(tool, 0.1, 0.04, 0.004);

@@ -16,13 +16,7 @@ namespace {
 
 // A 120 x 120 mm bin with 40 mm of soil in two layers, quick.json-like laws.
 study::Study smallBed() {
-  study::Study s = support::binStudy("soil-bed", study::StudyKind::Coupled, 0.12, 0.12, 0.04);
-  auto& soil = s.soil;
-  support::useTopAndDeepLayers(soil, 0.01);
-  for (const auto& [a, b] : {std::pair{"top", "top"}, {"top", "deep"}, {"deep", "deep"}})
-    soil.interactions.push_back({a, b, 0.6, 0.3, 0.1, 3e4});
-  for (const char* m : {"top", "deep"}) soil.interactions.push_back({m, "steel", 0.6, 0.3, 0.1, 0});
-  soil.settle_kinetic_energy_J = 1e-5;
+  study::Study s = support::twoLayerTestBin("soil-bed", study::StudyKind::Coupled);
   s.kind = study::StudyKind::DemOnly;
   support::useBuiltinStep(s, 0.001);
   return s;
