@@ -206,9 +206,17 @@ void DemSimulation::checkRestoredAgainst(const DemSimulation& live, const WallCo
   for (const auto& k : nb_stiff_)
     require(std::isfinite(k.kn) && std::isfinite(k.kt) && std::isfinite(k.gamma_n) && std::isfinite(k.gamma_t),
             "a pair stiffness is not finite");
+  // Each part's window end is what its rows imply (fillNextList): a wrong one lets a part write
+  // forces where another part writes them, or past its buffer.
   require(part_window_end_.empty() || part_window_end_.size() == static_cast<std::size_t>(threads_),
           "part windows have the wrong count");
-  for (const auto end : part_window_end_) require(end <= n, "a part window ends past the particles");
+  require(!lists_valid_ || !part_window_end_.empty(), "part windows missing");
+  for (int p = 0; p < static_cast<int>(part_window_end_.size()); ++p) {
+    std::size_t end = rangeEnd(p);
+    for (std::size_t i = rangeBegin(p); i < rangeEnd(p) && i + 1 < nb_start_.size(); ++i)
+      if (nb_start_[i + 1] > nb_start_[i]) end = std::max(end, static_cast<std::size_t>(nb_j_[nb_start_[i + 1] - 1]) + 1);
+    require(part_window_end_[p] == end, "a part window differs from what its neighbour rows reach");
+  }
   // Wall candidates and contacts.
   require(isOffsets(wc_start_, n, wc_mesh_.size()) && wc_tri_.size() == wc_mesh_.size() &&
               (!lists_valid_ || (wc_start_.size() == n + 1 && near_plane_.size() == n)) &&

@@ -265,3 +265,27 @@ TEST_CASE("a checkpoint of another thread count is refused with a message", "[bu
   adapter::PayloadReader in(state.bytes(), "state");
   CHECK_THROWS_WITH(b.loadState(in), Catch::Contains("threads"));
 }
+
+TEST_CASE("a checkpoint whose part window disagrees with its neighbour rows is refused", "[builtin]") {
+  // A window end below its part's rows let a part write forces another part owns (found by the
+  // checkpoint fuzzer as a failed assertion in the pair-force loop).
+  DemSimulation a = settlingBox(2, cohesiveRolling());
+  a.run(10);
+  adapter::PayloadWriter state;
+  a.saveState(state);
+  std::string bytes = state.bytes();
+  // The windows are stored as a count of 2 followed by two ends, the last being the particle count.
+  const std::uint64_t n = a.particleCount();
+  std::vector<std::size_t> at;
+  for (std::size_t k = 0; k + 24 <= bytes.size(); ++k) {
+    std::uint64_t w[3];
+    std::memcpy(w, bytes.data() + k, sizeof w);
+    if (w[0] == 2 && w[1] >= n / 2 && w[1] <= n && w[2] == n) at.push_back(k);
+  }
+  REQUIRE(at.size() == 1);
+  const std::uint64_t too_short = n / 2 - 1;
+  std::memcpy(bytes.data() + at.front() + 8, &too_short, sizeof too_short);
+  DemSimulation b = settlingBox(2, cohesiveRolling());
+  adapter::PayloadReader in(bytes, "state");
+  CHECK_THROWS_WITH(b.loadState(in), Catch::Contains("part window"));
+}
