@@ -269,9 +269,25 @@ class Search {
 // One-sigma widths in optimiser coordinates from the Gauss-Newton curvature at x (contract).
 // Per parameter the standard deviation in optimiser coordinates (infinite along a flat direction),
 // and the eigenvalues of J^T J in `eigenvalues`.
-std::vector<double> unitSigmas(Evaluator& evaluator, const std::vector<double>& x, double step, std::vector<double>& eigenvalues) {
+// Per parameter, in optimiser units: its standard deviation sqrt((J^T J)^-1_ii) (infinite along a flat
+// direction) and its model-form shift sum_k |G_ik| f_k, G = (J^T J)^+ J^T, f_k the model-form part of
+// residual k's sigma in its own units (objective.hpp): the largest move a model-form error of the
+// stated tolerance, coherent over the residuals, makes in a linearised fit.
+struct UnitSigmas {
+  std::vector<double> sigma, model_form;
+};
+
+UnitSigmas unitSigmas(Evaluator& evaluator, const std::vector<double>& x, const CalibrationOptions& options, std::vector<double>& eigenvalues) {
+  const double step = options.curvature_step;
   const auto& specs = evaluator.specs();
-  const auto m = static_cast<Eigen::Index>(evaluator.at(valuesOf(specs, x)).residuals.size());
+  const auto& at_fit = evaluator.at(valuesOf(specs, x)).residuals;
+  const auto m = static_cast<Eigen::Index>(at_fit.size());
+  Eigen::VectorXd form(m);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const auto it = options.objective.model_form_relative.find(at_fit[k].quantity);
+    const double relative = it == options.objective.model_form_relative.end() ? 0.0 : it->second;
+    form(k) = at_fit[k].sigma > 0 ? relative * std::abs(at_fit[k].measured) / at_fit[k].sigma : 0.0;
+  }
   const auto n = static_cast<Eigen::Index>(x.size());
   Eigen::MatrixXd J(m, n);
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -286,16 +302,21 @@ std::vector<double> unitSigmas(Evaluator& evaluator, const std::vector<double>& 
   eigenvalues.assign(eig.eigenvalues().data(), eig.eigenvalues().data() + n);
   const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
   std::vector<double> sigma(n, 0.0);
+  Eigen::MatrixXd pseudo_inverse = Eigen::MatrixXd::Zero(n, n);
   for (Eigen::Index k = 0; k < n; ++k) {
     const double lambda = eig.eigenvalues()(k);
     const bool flat = !(lambda > 1e-12 * largest) || !(lambda > 0);
+    if (!flat) pseudo_inverse += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose() / lambda;
     for (Eigen::Index i = 0; i < n; ++i) {
       const double v = eig.eigenvectors()(i, k);
       sigma[i] += flat ? (std::abs(v) > 1e-6 ? std::numeric_limits<double>::infinity() : 0.0) : v * v / lambda;
     }
   }
   for (double& s : sigma) s = std::sqrt(s);
-  return sigma;
+  const Eigen::MatrixXd gain = pseudo_inverse * J.transpose();
+  std::vector<double> model_form(n);
+  for (Eigen::Index i = 0; i < n; ++i) model_form[i] = gain.row(i).cwiseAbs().dot(form);
+  return {sigma, model_form};
 }
 
 double toFileSigma(const ParameterSpec& spec, double value, double sigma_x) {
@@ -346,7 +367,8 @@ CalibrationResult calibrate(const CalibrationProblem& problem, Model& model, con
   for (int s = 0; s < std::max(1, options.starts); ++s) found.push_back(search.run(s, startPoint(s, initial_x)));
   const LocalMinimum best = *std::min_element(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.chi2 < b.chi2; });
 
-  const std::vector<double> sigma = unitSigmas(evaluator, best.x, options.curvature_step, result.curvature_eigenvalues);
+  const UnitSigmas unit = unitSigmas(evaluator, best.x, options, result.curvature_eigenvalues);
+  const std::vector<double>& sigma = unit.sigma;
   const std::vector<double> best_values = valuesOf(specs, best.x);
   for (int i = 0; i < n; ++i) {
     FittedParameter p;
@@ -358,6 +380,7 @@ CalibrationResult calibrate(const CalibrationProblem& problem, Model& model, con
                    sd <= options.unidentified_relative * std::abs(best_values[i]);
     p.std_dev = std::isfinite(sd) ? sd : std::numeric_limits<double>::infinity();
     if (p.identified) p.value = best_values[i];
+    p.model_form_shift = toFileSigma(specs[i], best_values[i], unit.model_form[i]);
     result.parameters.push_back(p);
   }
   result.minima = distinctMinima(found, best, sigma, specs, options.noise_chi2);

@@ -158,6 +158,20 @@ double noiseErrorPercent(const std::vector<Residual>& residuals, const Context& 
   return n > 0 ? std::sqrt(sum / n) : 0.0;
 }
 
+// Holm's step-down at the family-wise `level`: sets `significant` of the tests (each with `p_value`).
+template <class Test>
+void holm(std::vector<Test>& tests, double level) {
+  std::vector<std::size_t> order(tests.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    if (tests[order[k]].p_value > level / static_cast<double>(order.size() - k)) break;
+    tests[order[k]].significant = true;
+  }
+}
+
+double twoSidedP(double z) { return std::erfc(std::abs(z) / std::numbers::sqrt2); }
+
 // Step 3: z and two-sided p per residual, Holm's step-down at the family-wise level.
 std::vector<Localisation> localise(const std::vector<Residual>& residuals, const Context& c) {
   std::vector<Localisation> out;
@@ -165,16 +179,10 @@ std::vector<Localisation> localise(const std::vector<Residual>& residuals, const
     Localisation l{r.key, r.quantity, r.measured, r.simulated, testSigma(r, c)};
     l.residual_percent = r.measured != 0 ? 100 * (r.simulated - r.measured) / r.measured : 0.0;
     l.z = (r.simulated - r.measured) / l.sigma;
-    l.p_value = std::erfc(std::abs(l.z) / std::numbers::sqrt2);
+    l.p_value = twoSidedP(l.z);
     out.push_back(l);
   }
-  std::vector<std::size_t> order(out.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return out[a].p_value < out[b].p_value; });
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    if (out[order[k]].p_value > c.settings.significance_level / static_cast<double>(order.size() - k)) break;
-    out[order[k]].significant = true;
-  }
+  holm(out, c.settings.significance_level);
   return out;
 }
 
@@ -368,7 +376,7 @@ const Localisation& largest(const std::vector<Localisation>& localisation) {
   return *std::max_element(localisation.begin(), localisation.end(), [](const auto& a, const auto& b) { return std::abs(a.z) < std::abs(b.z); });
 }
 
-// Step 6's conditions for naming `m` ("" when it qualifies, else why not).
+// Step 7's conditions for naming `m` ("" when it qualifies, else why not).
 std::string notNamed(const ModelFit& m, const DiagnosisSettings& s) {
   if (m.ln_bayes_factor < s.min_ln_bayes_factor)
     return "ln B " + number(m.ln_bayes_factor) + " < " + number(s.min_ln_bayes_factor);
@@ -391,9 +399,10 @@ void decide(Diagnosis& d, const DiagnosisSettings& s) {
                number(top.residual_percent) + " %, " + number(std::abs(top.z)) + " standard errors)";
     return;
   }
-  for (const ModelFit& m : d.models)
-    if (notNamed(m, s).empty()) {
+  for (std::size_t k = 0; k < d.models.size(); ++k)
+    if (const ModelFit& m = d.models[k]; notNamed(m, s).empty()) {
       d.verdict = Verdict::Cause;
+      d.named_model = k;
       d.causes = m.causes;
       d.gain_percent = m.gain_percent;
       d.extended_study = m.extended_study;
@@ -409,6 +418,74 @@ void decide(Diagnosis& d, const DiagnosisSettings& s) {
   const bool others_within = std::any_of(d.localisation.begin(), d.localisation.end(), [](const Localisation& l) { return !l.significant; });
   d.reason = significantText(d.localisation) + (others_within ? "; the other quantities within noise" : "") +
              "; no cause or pair of the catalogue explains it (" + best + ")";
+}
+
+// The catalogue cause among `causes` whose extension fits `pointer` alone ("" none).
+std::string soleOwner(const std::string& pointer, const std::vector<const Cause*>& causes, const Context& c) {
+  for (const Cause* cause : causes) {
+    try {
+      const Extension e = cause->extend(c.study, depthsOf(c.recordings));
+      if (e.parameters.size() == 1 && e.parameters.front().pointer == pointer) return cause->id;
+    } catch (const ArgumentError&) {  // the study cannot take this cause: it owns nothing here
+    }
+  }
+  return "";
+}
+
+// Step 6: the baseline parameters of `fit` against the study's values.
+std::vector<CalibrationShift> calibrationShifts(const ModelFit& fit, const std::vector<const Cause*>& causes, const Context& c) {
+  std::vector<CalibrationShift> out;
+  for (const ParameterSpec& base : c.settings.baseline_fit) {
+    const auto p = std::find_if(fit.parameters.begin(), fit.parameters.end(), [&](const FittedParameter& q) { return q.spec.pointer == base.pointer; });
+    if (p == fit.parameters.end()) continue;
+    CalibrationShift shift;
+    shift.spec = p->spec;
+    shift.study_value = p->initial;
+    shift.fitted = p->best;
+    shift.std_dev = p->std_dev;
+    shift.model_form_shift = p->model_form_shift;
+    shift.shift_percent = p->initial != 0 ? 100 * (p->best - p->initial) / p->initial : 0.0;
+    const double sigma = std::hypot(p->std_dev, p->model_form_shift);
+    shift.z = p->identified && std::isfinite(sigma) && sigma > 0 ? (p->best - p->initial) / sigma : 0.0;
+    shift.p_value = twoSidedP(shift.z);
+    shift.cause = soleOwner(base.pointer, causes, c);
+    out.push_back(shift);
+  }
+  holm(out, c.settings.significance_level);
+  return out;
+}
+
+std::string shiftText(const CalibrationShift& s) {
+  return s.spec.label() + " " + (s.shift_percent >= 0 ? "+" : "") + number(s.shift_percent) + " % from the study's " + number(s.study_value) + " (" +
+         number(std::abs(s.z)) + " standard errors): `" + s.cause + "`";
+}
+
+// Step 6's causes added to the verdict of step 7.
+void creditShifts(Diagnosis& d, const std::vector<const Cause*>& causes, const Context& c) {
+  d.shifts = calibrationShifts(d.named_model ? d.models[*d.named_model] : d.baseline, causes, c);
+  std::string credited;
+  for (const CalibrationShift& s : d.shifts) {
+    if (!s.significant || s.cause.empty() || contains(d.causes, s.cause)) continue;
+    d.causes.push_back(s.cause);
+    credited += (credited.empty() ? "" : "; ") + shiftText(s);
+  }
+  if (credited.empty()) return;
+  switch (d.verdict) {
+    case Verdict::NoSignificantDiscrepancy:
+      d.verdict = Verdict::Cause;
+      d.gain_percent = d.nominal_error_percent > 0
+                           ? 100 * (d.nominal_error_percent - std::max(d.baseline.error_after_percent, d.baseline.noise_error_percent)) /
+                                 d.nominal_error_percent
+                           : 0.0;
+      d.reason = "the calibrated baseline moved " + credited + "; with it " + d.reason;
+      return;
+    case Verdict::Cause:
+      d.reason += "; the calibration moved " + credited;
+      return;
+    case Verdict::UnexplainedDiscrepancy:
+      d.causes.clear();  // a residual no model explains: no cause is named, the shifts are reported
+      return;
+  }
 }
 
 }  // namespace
@@ -524,6 +601,7 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   }
   for (ModelFit& m : d.models) measureBenefit(m, d.baseline, c);
   decide(d, settings);
+  creditShifts(d, causes, c);
   d.wall_time_s = secondsSince(start);
   return d;
 }

@@ -96,6 +96,32 @@ const Section<Localisation>& localisationSection() {
   return section;
 }
 
+// calibration_shifts.csv (and `calibration_shifts` of the JSON): step 6 of diagnose.hpp.
+const Section<CalibrationShift>& shiftSection() {
+  using R = CalibrationShift;
+  static const Section<R> section{
+      {{"pointer", [](const R& s) -> CellValue { return s.spec.pointer; }},
+       {"label", [](const R& s) -> CellValue { return s.spec.label(); }},
+       {"study_value", [](const R& s) -> CellValue { return s.study_value; }},
+       {"fitted", [](const R& s) -> CellValue { return s.fitted; }},
+       {"std_dev", [](const R& s) -> CellValue { return s.std_dev; }},
+       {"model_form_shift", [](const R& s) -> CellValue { return s.model_form_shift; }},
+       {"shift_percent", [](const R& s) -> CellValue { return s.shift_percent; }},
+       {"z", [](const R& s) -> CellValue { return s.z; }},
+       {"p_value", [](const R& s) -> CellValue { return s.p_value; }},
+       {"significant", [](const R& s) -> CellValue { return s.significant; }},
+       {"cause", [](const R& s) -> CellValue { return s.cause; }}},
+      [](const R& s) { return "`" + s.spec.label() + "`"; },
+      {{"study", md::number("study_value", 4)},
+       {"calibrated", md::number("fitted", 4)},
+       {"shift (%)", md::number("shift_percent", 3)},
+       {"z", md::number("z", 3)},
+       {"significant", md::onlyIf("significant", md::literal("**yes**"), "no")},
+       {"cause", md::text("cause")}},
+      "parameter"};
+  return section;
+}
+
 std::vector<ParameterRow> modelParameterRows(const ModelFit& m) { return parameterRows(m.id(), m.parameters); }
 
 // Calibrated channels of a recording (raw ones through their factors).
@@ -198,10 +224,12 @@ std::string modelFormText(const DiagnosisSettings& settings) {
   return text + shortNum(modelFormPercent(settings, "")) + " % for the other quantities";
 }
 
-const ModelFit* namedModel(const Diagnosis& d) {
-  for (const ModelFit& m : d.models)
-    if (m.causes == d.causes && !d.causes.empty()) return &m;
-  return nullptr;
+const ModelFit* namedModel(const Diagnosis& d) { return d.named_model ? &d.models[*d.named_model] : nullptr; }
+
+std::string joinedIds(const std::vector<std::string>& ids) {
+  std::string text;
+  for (const std::string& id : ids) text += (text.empty() ? "" : "+") + id;
+  return text;
 }
 
 std::string verdictSentence(const Diagnosis& d) {
@@ -209,7 +237,7 @@ std::string verdictSentence(const Diagnosis& d) {
     case Verdict::NoSignificantDiscrepancy:
       return "**No significant discrepancy**: " + d.reason + ".";
     case Verdict::Cause:
-      return "**Cause: " + (namedModel(d) ? "`" + namedModel(d)->id() + "`" : std::string("?")) + "** - " + d.reason + ".";
+      return "**Cause: `" + joinedIds(d.causes) + "`** - " + d.reason + ".";
     case Verdict::UnexplainedDiscrepancy:
       return "**Unexplained discrepancy**: " + d.reason + ".";
   }
@@ -228,6 +256,8 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
   }
   nlohmann::json localisation = nlohmann::json::array();
   for (const Localisation& l : d.localisation) localisation.push_back(localisationSection().json(l));
+  nlohmann::json shifts = nlohmann::json::array();
+  for (const CalibrationShift& c : d.shifts) shifts.push_back(shiftSection().json(c));
   nlohmann::json considered = nlohmann::json::array();
   for (const CauseEvidence& c : d.considered)
     considered.push_back({{"id", c.id}, {"signature_present", c.match.plausible}, {"evidence", c.match.evidence}, {"judged_on", c.judged_on}});
@@ -237,6 +267,7 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
           {"reason", d.reason},
           {"gain_percent", d.gain_percent},
           {"localisation", localisation},
+          {"calibration_shifts", shifts},
           {"models", models},
           {"nominal_error_percent", d.nominal_error_percent},
           {"failed_baseline_cases", caseLabels(d.failed_baseline_cases)},
@@ -271,6 +302,9 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
     md += "Left out of every error and test: the cases whose nominal run failed (DEM blow-up): " + caseLabels(d.failed_baseline_cases).dump() + ".\n\n";
   md += unjudgedText(d.unjudged);
   md += "## Where the residual lives (calibrated baseline)\n\n" + localisationSection().markdownOf(d.localisation);
+  md += "\n## Calibration shifts (" + std::string(namedModel(d) ? "the named model" : "the calibrated baseline") +
+        ")\n\nThe baseline's parameters against the study's values, z = (calibrated - study) / sigma, Holm at the same level; a "
+        "significant shift of a parameter one cause owns names that cause.\n\n" + shiftSection().markdownOf(d.shifts);
   md += "\n## Model probabilities\n\nLaplace evidence, equal prior odds; held-out errors against the calibrated baseline's folds.\n\n" +
         modelSection().markdownOf(modelRows(d));
   md += "\n## Signatures (the study as given)\n\n" + signatureTable(d.signatures) + "\n## Causes considered\n\n";
@@ -302,6 +336,7 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   out.writeText("weight_signatures.csv", analysis::weightDropSignatureSection().csv(d.signatures.weight_drops));
   out.writeText("soil_signatures.csv", analysis::soilBinSignatureSection().csv(d.signatures.soil_bins));
   out.writeText("localisation.csv", localisationSection().csv(d.localisation));
+  out.writeText("calibration_shifts.csv", shiftSection().csv(d.shifts));
   out.writeText("models.csv", modelSection().csv(modelRows(d)));
   out.writeText("parameters.csv", parameterSection("model").csv(parameters));
 }

@@ -116,6 +116,9 @@ struct FittedParameter {
   std::optional<double> value;     // absent: unidentified
   double best = 0;                 // the best point found (what the calibrated study carries)
   double std_dev = 0;              // file units (infinite when H is singular along it)
+  // File units: the largest shift of the fit a model-form error of the objective's tolerance
+  // (objective.hpp, model_form_relative), coherent over the residuals, makes (0 without one).
+  double model_form_shift = 0;
   bool identified = true;
 };
 

@@ -29,12 +29,20 @@
 //     100 sigma / meas; gain = 100 (before - max(after, noise)) / before. The same in chi2 (step 3's
 //     sigma, so a quantity with a wide model-form tolerance does not mask the others): chi2 gain =
 //     100 (before - max(after, n)) / before, n the held-out residuals.
-//  6. Verdict: a model is named (verdict "cause", its one or two causes) when ln B = ln Z - ln Z_baseline
+//  6. Calibration shifts: each baseline parameter of the deciding fit (the named model's, else the
+//     calibrated baseline's) against the study's value, z = (fitted - study) / sigma, sigma the
+//     fit's standard deviation and the shift a model-form error can make in quadrature, Holm at
+//     settings.significance_level over the baseline's parameters. A significant shift of a parameter
+//     that a catalogue cause owns alone (E_Pa: young_modulus) names that cause: the study's value is
+//     what the simulation gets wrong, even where the baseline's range absorbs it.
+//  7. Verdict: a model is named (verdict "cause", its one or two causes) when ln B = ln Z - ln Z_baseline
 //     >= settings.min_ln_bayes_factor, none of its residuals is significant by step 3's test, and,
 //     when a split can identify it, its chi2 gain is at least settings.min_gain_percent over at least
 //     settings.min_held_out_folds folds (a model no split can identify, e.g. two damping terms from
 //     one weight, is judged on its evidence and the report says so); of several, the most probable.
-//     None: "unexplained discrepancy", naming the significant quantities, cases and sizes.
+//     None: "unexplained discrepancy", naming the significant quantities, cases and sizes. Step 6's
+//     causes are added to the named model's; with no residual significant they are the verdict
+//     "cause" on their own (the calibrated baseline is then the extended study).
 // - Errors are RMS over quantities of 100 (sim - meas) / meas, in percent (errorPercent).
 // - Every model run goes through the calibration's run cache (options.cache_dir).
 // - Throws ArgumentError for unusable input (no candidate cause, a named cause unknown, a case the
@@ -147,6 +155,19 @@ struct Localisation {
 
 // The model's own seed scatter of one quantity of one case (step 1): the sample standard deviation
 // of the study's value over `seeds` deposition seeds, in the quantity's unit.
+// A baseline parameter's calibrated value against the study's (step 6).
+struct CalibrationShift {
+  ParameterSpec spec;
+  double study_value = 0.0, fitted = 0.0, std_dev = 0.0;  // file units
+  double model_form_shift = 0.0;  // file units: FittedParameter::model_form_shift
+  double shift_percent = 0.0;     // 100 (fitted - study) / study
+  // (fitted - study) / sqrt(std_dev^2 + model_form_shift^2); 0 when the fit leaves it unidentified
+  double z = 0.0;
+  double p_value = 1.0;        // two-sided
+  bool significant = false;    // Holm over the baseline's parameters
+  std::string cause;           // the catalogue cause owning this parameter alone ("" none)
+};
+
 struct SeedScatter {
   analysis::CaseKey key;
   std::string quantity;
@@ -173,9 +194,11 @@ struct Diagnosis {
   ModelFit baseline;                         // the calibrated baseline
   std::vector<Localisation> localisation;    // its residuals tested (step 3)
   std::vector<ModelFit> models;              // causes and pairs, most probable first
+  std::optional<std::size_t> named_model;    // index into models of the named model (verdict Cause)
+  std::vector<CalibrationShift> shifts;      // step 6, of the deciding fit
   std::vector<UnjudgedQuantity> unjudged;
   Verdict verdict = Verdict::NoSignificantDiscrepancy;
-  std::vector<std::string> causes;           // the named model's causes (verdict Cause)
+  std::vector<std::string> causes;           // the named model's causes and step 6's (verdict Cause)
   std::string reason;                        // one sentence: why
   double gain_percent = 0.0;                 // the named model's; 0 without one
   nlohmann::ordered_json extended_study;     // the named model's fitted study, else the calibrated baseline's
