@@ -103,6 +103,52 @@ std::optional<double> slope(const std::vector<double>& x, const std::vector<doub
   return sxy / sxx;
 }
 
+// Mean force of one run over the displacement interval of `phase` while the tool moves: from the
+// last sample at the curve's smallest displacement to the first at its largest (a calibrated curve,
+// taken as it is, may hold the rest before the stroke and after it). nullopt without samples.
+std::optional<double> phaseForce(const DisplacementCurve& curve, StrokePhase phase, const EvaluationSettings& settings) {
+  if (curve.size() == 0) return std::nullopt;
+  const auto& x_all = curve.displacement_mm;
+  const auto last = static_cast<std::size_t>(std::max_element(x_all.begin(), x_all.end()) - x_all.begin());
+  std::size_t first = 0;
+  for (std::size_t i = 0; i <= last; ++i)
+    if (x_all[i] <= x_all[first]) first = i;
+  double sum = 0;
+  int n = 0;
+  for (std::size_t i = first; i <= last; ++i) {
+    const double x = curve.displacement_mm[i];
+    bool inside = false;
+    switch (phase) {
+      case StrokePhase::Insertion:
+        inside = x < settings.window_begin_mm;
+        break;
+      case StrokePhase::Window:
+        inside = x >= settings.window_begin_mm && x <= settings.window_end_mm;
+        break;
+      case StrokePhase::EndOfStroke:
+        inside = x > settings.window_end_mm;
+        break;
+    }
+    if (inside) sum += curve.force_N[i], ++n;
+  }
+  if (n == 0) return std::nullopt;
+  return sum / n;
+}
+
+PhaseMean phaseMean(const std::vector<EvaluatedRun>& runs, const CaseKey& key, StrokePhase phase, const EvaluationSettings& settings) {
+  std::vector<double> means;
+  for (const EvaluatedRun& r : runs)
+    if (r.key == key)
+      if (const auto m = phaseForce(r.curve, phase, settings)) means.push_back(*m);
+  PhaseMean out;
+  out.runs = static_cast<int>(means.size());
+  if (means.empty()) return out;
+  const SignalStatistics stats = meanAndStdDev(means);
+  out.mean_N = stats.mean;
+  if (means.size() >= 2) out.std_error_N = stats.std_dev / std::sqrt(static_cast<double>(means.size()));
+  return out;
+}
+
 using namespace report;
 
 // "value +- standard error" of the columns NAME and NAME_std_error.
@@ -117,6 +163,30 @@ void addEstimate(std::vector<Column<WeightDropSignature>>& columns, const std::s
 }
 
 }  // namespace
+
+std::string phaseName(StrokePhase phase) {
+  switch (phase) {
+    case StrokePhase::Insertion:
+      return "insertion";
+    case StrokePhase::Window:
+      return "window";
+    case StrokePhase::EndOfStroke:
+      return "end of stroke";
+  }
+  return "?";
+}
+
+std::vector<StrokePhaseForce> strokePhaseForces(const ComparisonResult& comparison, const EvaluationSettings& settings) {
+  std::vector<StrokePhaseForce> out;
+  for (const SoilBinComparison& c : comparison.soil_bin)
+    for (const StrokePhase phase : {StrokePhase::Insertion, StrokePhase::Window, StrokePhase::EndOfStroke}) {
+      StrokePhaseForce f{c.key, phase, phaseMean(comparison.measured.soil_bin_runs, c.key, phase, settings),
+                         phaseMean(comparison.simulated.soil_bin_runs, c.key, phase, settings)};
+      if (f.measured.runs > 0 && f.simulated.runs > 0) out.push_back(f);
+    }
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.key.depth_mm < b.key.depth_mm; });
+  return out;
+}
 
 Signatures signaturesOf(const ComparisonResult& comparison, const SignatureSettings& settings) {
   Signatures s;

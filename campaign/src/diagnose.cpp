@@ -186,6 +186,44 @@ std::vector<Localisation> localise(const std::vector<Residual>& residuals, const
   return out;
 }
 
+// The window mean force's seed scatter of `key` relative to its mean, over sqrt(M) (0 unknown).
+double relativeSeedScatter(const analysis::CaseKey& key, double window_mean_N, const Context& c) {
+  for (const SeedScatter& s : c.seed_scatter)
+    if (s.key == key && s.quantity == "window_mean_force_N" && window_mean_N != 0)
+      return s.sd / std::abs(window_mean_N) / std::sqrt(std::max(1, c.fits.model_seeds));
+  return 0.0;
+}
+
+// Step 3's localisation along the stroke for the soil-bin runs `runs` of `model` (PhaseLocalisation).
+std::vector<PhaseLocalisation> localisePhases(const std::vector<analysis::Recording>& runs, const std::string& model, const Context& c) {
+  std::vector<analysis::Recording> measured = ofKind(c.recordings, analysis::CaseKind::SoilBin), simulated = ofKind(runs, analysis::CaseKind::SoilBin);
+  if (measured.empty() || simulated.empty()) return {};
+  const auto& analysis = c.fits.objective.analysis;
+  const analysis::ComparisonResult comparison = analysis::compare(measured, simulated, analysis);
+  const double form = modelFormPercent(c.settings, "window_mean_force_N") / 100;
+  std::vector<PhaseLocalisation> out;
+  for (const analysis::StrokePhaseForce& f : analysis::strokePhaseForces(comparison, analysis.evaluation)) {
+    if (contains(c.failed, f.key)) continue;
+    PhaseLocalisation l;
+    l.key = f.key;
+    l.model = model;
+    l.phase = analysis::phaseName(f.phase);
+    l.measured_N = f.measured.mean_N;
+    l.simulated_N = f.simulated.mean_N;
+    const auto window = std::find_if(comparison.soil_bin.begin(), comparison.soil_bin.end(), [&](const auto& b) { return b.key == f.key; });
+    const double seed = relativeSeedScatter(f.key, window->simulated.force_mean_N, c) * std::abs(f.simulated.mean_N);
+    const double meas = f.measured.std_error_N.value_or(seed);
+    const double sim = f.simulated.std_error_N.value_or(f.measured.std_error_N.value_or(seed));
+    l.sigma_N = std::sqrt(meas * meas + sim * sim + std::pow(form * f.measured.mean_N, 2));
+    l.residual_percent = f.measured.mean_N != 0 ? 100 * (f.simulated.mean_N - f.measured.mean_N) / f.measured.mean_N : 0.0;
+    l.z = l.sigma_N > 0 ? (f.simulated.mean_N - f.measured.mean_N) / l.sigma_N : 0.0;
+    l.p_value = twoSidedP(l.z);
+    out.push_back(l);
+  }
+  holm(out, c.settings.significance_level);
+  return out;
+}
+
 int significantCount(const std::vector<Residual>& residuals, const Context& c) {
   const auto l = localise(residuals, c);
   return static_cast<int>(std::count_if(l.begin(), l.end(), [](const Localisation& x) { return x.significant; }));
@@ -583,6 +621,8 @@ Diagnosis diagnose(const ordered_json& study, const std::string& origin, const s
   d.baseline = fitModel({}, c);
   measureBenefit(d.baseline, d.baseline, c);
   d.localisation = localise(d.baseline.residuals, c);
+  d.phases = localisePhases(d.nominal_runs, "study as given", c);
+  for (const PhaseLocalisation& l : localisePhases(d.baseline.runs, "calibrated baseline", c)) d.phases.push_back(l);
   for (const std::string& name : quantityNames()) {
     std::vector<Residual> of;
     for (const Residual& r : ran)

@@ -96,6 +96,32 @@ const Section<Localisation>& localisationSection() {
   return section;
 }
 
+// phase_localisation.csv (and `phase_localisation` of the JSON): soil-bin residuals per stroke phase.
+const Section<PhaseLocalisation>& phaseSection() {
+  using R = PhaseLocalisation;
+  static const Section<R> section{
+      {{"case", [](const R& l) -> CellValue { return l.key.title(); }},
+       {"model", [](const R& l) -> CellValue { return l.model; }},
+       {"phase", [](const R& l) -> CellValue { return l.phase; }},
+       {"measured_N", [](const R& l) -> CellValue { return l.measured_N; }},
+       {"simulated_N", [](const R& l) -> CellValue { return l.simulated_N; }},
+       {"sigma_N", [](const R& l) -> CellValue { return l.sigma_N; }},
+       {"residual_percent", [](const R& l) -> CellValue { return l.residual_percent; }},
+       {"z", [](const R& l) -> CellValue { return l.z; }},
+       {"p_value", [](const R& l) -> CellValue { return l.p_value; }},
+       {"significant", [](const R& l) -> CellValue { return l.significant; }}},
+      [](const R& l) { return l.key.title(); },
+      {{"model", md::text("model")},
+       {"phase", md::text("phase")},
+       {"measured (N)", md::number("measured_N", 4)},
+       {"simulated (N)", md::number("simulated_N", 4)},
+       {"residual (%)", md::number("residual_percent", 3)},
+       {"z", md::number("z", 3)},
+       {"significant", md::onlyIf("significant", md::literal("**yes**"), "no")}},
+      "case"};
+  return section;
+}
+
 // calibration_shifts.csv (and `calibration_shifts` of the JSON): step 6 of diagnose.hpp.
 const Section<CalibrationShift>& shiftSection() {
   using R = CalibrationShift;
@@ -256,6 +282,8 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
   }
   nlohmann::json localisation = nlohmann::json::array();
   for (const Localisation& l : d.localisation) localisation.push_back(localisationSection().json(l));
+  nlohmann::json phases = nlohmann::json::array();
+  for (const PhaseLocalisation& l : d.phases) phases.push_back(phaseSection().json(l));
   nlohmann::json shifts = nlohmann::json::array();
   for (const CalibrationShift& c : d.shifts) shifts.push_back(shiftSection().json(c));
   nlohmann::json considered = nlohmann::json::array();
@@ -268,6 +296,7 @@ nlohmann::json toJson(const Diagnosis& d, const DiagnosisSettings& settings, con
           {"gain_percent", d.gain_percent},
           {"localisation", localisation},
           {"calibration_shifts", shifts},
+          {"phase_localisation", phases},
           {"models", models},
           {"nominal_error_percent", d.nominal_error_percent},
           {"failed_baseline_cases", caseLabels(d.failed_baseline_cases)},
@@ -302,6 +331,10 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
     md += "Left out of every error and test: the cases whose nominal run failed (DEM blow-up): " + caseLabels(d.failed_baseline_cases).dump() + ".\n\n";
   md += unjudgedText(d.unjudged);
   md += "## Where the residual lives (calibrated baseline)\n\n" + localisationSection().markdownOf(d.localisation);
+  if (!d.phases.empty())
+    md += "\n## Along the stroke (soil-bin runs)\n\nMean force per phase of the stroke (insertion: before the window; end of stroke: "
+          "after it), the study as given (whole stroke) and the calibrated baseline (its fits' runs); Holm per model at the same level. "
+          "Reported, not part of the verdict.\n\n" + phaseSection().markdownOf(d.phases);
   md += "\n## Calibration shifts (" + std::string(namedModel(d) ? "the named model" : "the calibrated baseline") +
         ")\n\nThe baseline's parameters against the study's values, z = (calibrated - study) / sigma, Holm at the same level; a "
         "significant shift of a parameter one cause owns names that cause.\n\n" + shiftSection().markdownOf(d.shifts);
@@ -337,6 +370,7 @@ void writeDiagnosis(const Diagnosis& d, const DiagnosisSettings& settings, analy
   out.writeText("soil_signatures.csv", analysis::soilBinSignatureSection().csv(d.signatures.soil_bins));
   out.writeText("localisation.csv", localisationSection().csv(d.localisation));
   out.writeText("calibration_shifts.csv", shiftSection().csv(d.shifts));
+  out.writeText("phase_localisation.csv", phaseSection().csv(d.phases));
   out.writeText("models.csv", modelSection().csv(modelRows(d)));
   out.writeText("parameters.csv", parameterSection("model").csv(parameters));
 }

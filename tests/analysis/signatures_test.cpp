@@ -87,3 +87,34 @@ TEST_CASE("soil-bin signatures give the bias per depth and its trend with depth"
   CHECK(s.soil_bins[1].end_rise_difference == Approx(0).margin(0.05));
   CHECK(s.soil_bins[1].fluctuation_ratio < 1.0);
 }
+
+TEST_CASE("stroke phases put a discrepancy at the end wall into the end of stroke, not the insertion or the window", "[analysis]") {
+  TempDir dir("stroke_phases");
+  std::filesystem::create_directories(dir / "m");
+  std::filesystem::create_directories(dir / "s");
+  // The same run on both sides, two repeats each, except that the simulated force rises toward the
+  // end wall twice as steeply (wall gain 3 against 1.5 from 540 mm on).
+  for (int repeat : {1, 2}) {
+    SoilBinTruth t;
+    t.repeat = repeat;
+    t.seed = static_cast<std::uint64_t>(repeat);
+    writeSyntheticRecording(makeSoilBinRecording(t, RecordingFormat::Raw), dir / "m" / ("r" + std::to_string(repeat) + ".csv"));
+    t.wall_gain = 3.0;
+    t.seed = static_cast<std::uint64_t>(10 + repeat);
+    writeSyntheticRecording(makeSoilBinRecording(t, RecordingFormat::Calibrated), dir / "s" / ("r" + std::to_string(repeat) + ".csv"));
+  }
+  const AnalysisSettings settings;
+  const auto phases = strokePhaseForces(compare(readRecordings({dir / "m"}), readRecordings({dir / "s"}), settings), settings.evaluation);
+  REQUIRE(phases.size() == 3);
+  const auto percent = [](const StrokePhaseForce& f) { return 100 * (f.simulated.mean_N - f.measured.mean_N) / f.measured.mean_N; };
+  CHECK(phaseName(phases[0].phase) == "insertion");
+  CHECK(phaseName(phases[2].phase) == "end of stroke");
+  CHECK(std::abs(percent(phases[0])) < 2.0);
+  CHECK(std::abs(percent(phases[1])) < 1.0);
+  CHECK(percent(phases[2]) > 10.0);  // the 60 mm of steeper wall in the last 100 mm of the stroke
+  for (const auto& f : phases) {
+    CHECK(f.measured.runs == 2);
+    CHECK(f.simulated.runs == 2);
+    CHECK(f.measured.std_error_N.has_value());
+  }
+}

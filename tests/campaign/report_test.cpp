@@ -128,7 +128,17 @@ Diagnosis diagnosis() {
   force.residual_percent = 18.4, force.z = 11.2, force.p_value = 4e-29, force.significant = true;
   Localisation damping{weight(0.125), "damping_ratio", 0.012, 0.012, 0.0001};
   d.localisation = {force, damping};
+  PhaseLocalisation end_wall;
+  end_wall.key = soilBin(40), end_wall.model = "study as given", end_wall.phase = "end of stroke";
+  end_wall.measured_N = 12.5, end_wall.simulated_N = 16.0, end_wall.sigma_N = 0.7, end_wall.residual_percent = 28.0, end_wall.z = 5.0;
+  end_wall.p_value = 5.7e-7, end_wall.significant = true;
+  d.phases = {end_wall};
+  CalibrationShift modulus;
+  modulus.spec.pointer = "/tools/0/fem/E_Pa", modulus.study_value = 4.06e9, modulus.fitted = 4.07e9, modulus.std_dev = 1e7;
+  modulus.model_form_shift = 2e7, modulus.shift_percent = 0.246, modulus.z = 0.447, modulus.p_value = 0.65, modulus.cause = "young_modulus";
+  d.shifts = {modulus};
   d.verdict = Verdict::Cause;
+  d.named_model = 0;
   d.causes = {"clamp_compliance"};
   d.reason = "clamp_compliance: ln B 1419 over the calibrated baseline";
   d.gain_percent = 95.3, d.nominal_error_percent = 17.2, d.wall_time_s = 12;
@@ -182,6 +192,8 @@ TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, the verdict 
   const nlohmann::json doc = toJson(d, settings, "extended_study.json");
   checkCsvMatchesJson(readText(dir / "out" / "models.csv"), doc["models"]);
   checkCsvMatchesJson(readText(dir / "out" / "localisation.csv"), doc["localisation"]);
+  checkCsvMatchesJson(readText(dir / "out" / "phase_localisation.csv"), doc["phase_localisation"]);
+  checkCsvMatchesJson(readText(dir / "out" / "calibration_shifts.csv"), doc["calibration_shifts"]);
   checkCsvMatchesJson(readText(dir / "out" / "parameters.csv"), nestedRows(doc["models"], "parameters"));
   checkCsvMatchesJson(readText(dir / "out" / "weight_signatures.csv"), doc["signatures"]["weight_drops"]);
   checkCsvMatchesJson(readText(dir / "out" / "soil_signatures.csv"), doc["signatures"]["soil_bins"]);
@@ -205,6 +217,11 @@ TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, the verdict 
   CHECK(doc["localisation"][0]["z"].get<double>() == 11.2);
   CHECK(doc["localisation"][0]["significant"] == true);
   CHECK(doc["localisation"][1]["significant"] == false);
+  CHECK(doc["phase_localisation"][0]["phase"] == "end of stroke");
+  CHECK(doc["phase_localisation"][0]["z"].get<double>() == 5.0);
+  CHECK(doc["calibration_shifts"][0]["cause"] == "young_modulus");
+  CHECK(doc["calibration_shifts"][0]["model_form_shift"].get<double>() == 2e7);
+  CHECK(doc["calibration_shifts"][0]["significant"] == false);
   CHECK(doc["considered"][1]["evidence"] == "frequency ratio 0.93 +- 0.01: changed, \"not a gain\"");
   CHECK(doc["signatures"]["weight_drops"][1]["force_ratio"].get<double>() == 0.961);
   CHECK(doc["signatures"]["soil_bins"][0]["deformation_bias_percent"].is_null());
@@ -215,7 +232,9 @@ TEST_CASE("diagnose's tables: every CSV cell equals its JSON value, the verdict 
                      "| `clamp_compliance` | 1 | 1.42e+03 | 0 | 17.2 -> 0.15 | 95.3 | 1.08e+03 -> 0.39 | E_Pa = 4.07e+09 +- 1e+07; "
                      "clamp_rotational_stiffness_Nm_per_rad = 1.52 +- 0.03 | leave one case out (2 folds) |",
                      "| 0.125 kg | 0.959 +- 0.004 | 1.17 +- 0.01 | 4.39 / 4.58 | 0.93 +- 0.002 | 0.0011 +- 0.0004 |",
-                     "| 40 mm | -37.5 | - | 0.02 | 0.8 | -1.1 / -0.9 |"});
+                     "| 40 mm | -37.5 | - | 0.02 | 0.8 | -1.1 / -0.9 |",
+                     "| PMMA, 40 mm depth | study as given | end of stroke | 12.5 | 16 | 28 | 5 | **yes** |",
+                     "| `E_Pa` | 4.06e+09 | 4.07e+09 | 0.246 | 0.447 | no | young_modulus |"});
 }
 
 namespace {

@@ -18,6 +18,11 @@
 //   channel's ratio and nothing else; mass-proportional damping raises the damping difference more
 //   at the heavy weight, stiffness-proportional damping more at the light one.
 //
+// Stroke phases of soil-bin runs, per depth and phase (insertion: displacement before the window;
+// window; end of stroke: after it, the approach to the end wall): the mean force of each run over
+// the phase, averaged over each side's runs, with the standard error of that average (the spread
+// between runs over sqrt(runs); absent for a single run). Where along the stroke a discrepancy lives.
+//
 // Soil-bin runs (Sections 2.3, 3.6), per depth: bias of the window means 100 (sim - meas) / meas of
 // force and deformation; the end-of-stroke rise (mean force over the last `end_fraction` of each
 // side's displacement range over the window mean, simulated minus measured); the fluctuation
@@ -32,6 +37,7 @@
 #include <nlohmann/json.hpp>
 
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace demfem::analysis {
@@ -68,6 +74,24 @@ struct SoilBinSignature {
   double spectral_slope_measured = 0.0;   // b of a f^b, force
   double spectral_slope_simulated = 0.0;
 };
+
+enum class StrokePhase { Insertion, Window, EndOfStroke };
+std::string phaseName(StrokePhase phase);  // "insertion", "window", "end of stroke"
+
+struct PhaseMean {
+  double mean_N = 0.0;
+  std::optional<double> std_error_N;  // runs >= 2
+  int runs = 0;
+};
+
+struct StrokePhaseForce {
+  CaseKey key;
+  StrokePhase phase = StrokePhase::Window;
+  PhaseMean measured, simulated;
+};
+
+// Per case on both sides, per phase with samples on both sides (by depth, then phase).
+std::vector<StrokePhaseForce> strokePhaseForces(const ComparisonResult& comparison, const EvaluationSettings& settings);
 
 struct Signatures {
   std::vector<WeightDropSignature> weight_drops;  // by mass, ascending

@@ -13,7 +13,8 @@
 //     sigma^2 = sigma_meas^2 + s_model^2 / M + (modelFormPercent / 100 meas)^2 (objective.hpp;
 //     M the fits' model seeds), two-sided p-values, Holm's step-down at the family-wise level
 //     settings.significance_level over all quantities of all cases. None significant: verdict
-//     "no significant discrepancy". The per-quantity and per-case residuals are the localisation.
+//     "no significant discrepancy". The per-quantity and per-case residuals are the localisation;
+//     for soil-bin cases also per phase of the stroke (PhaseLocalisation).
 //  4. Models: every cause of the domains (or settings.causes) fitted together with the baseline's
 //     parameters (a cause's own range replaces the baseline's for the same pointer), on all cases and
 //     per fold as in step 2. When the best single cause (by evidence) still leaves a significant
@@ -153,6 +154,24 @@ struct Localisation {
   bool significant = false;       // by Holm's step-down at the family-wise level
 };
 
+// Where along the stroke a soil-bin discrepancy lives (step 3, reported, not part of the verdict):
+// the mean force of one phase (analysis::strokePhaseForces) of `model` ("study as given": its
+// whole-stroke runs; "calibrated baseline": its fit's runs, which end with the window when the fits
+// cut the stroke) against the measured. sigma^2: the measured repeats' standard error squared, the
+// model's (its runs' spread; with one run the measured repeats' taken for it; without repeats the
+// window mean's seed scatter over sqrt(M) scaled to the phase's mean), and the window mean's
+// model-form tolerance times the measured mean. Holm over every row of one model at the level.
+struct PhaseLocalisation {
+  analysis::CaseKey key;
+  std::string model;  // "study as given" or "calibrated baseline"
+  std::string phase;  // analysis::phaseName
+  double measured_N = 0.0, simulated_N = 0.0, sigma_N = 0.0;
+  double residual_percent = 0.0;  // 100 (sim - meas) / meas
+  double z = 0.0;
+  double p_value = 1.0;
+  bool significant = false;
+};
+
 // The model's own seed scatter of one quantity of one case (step 1): the sample standard deviation
 // of the study's value over `seeds` deposition seeds, in the quantity's unit.
 // A baseline parameter's calibrated value against the study's (step 6).
@@ -193,6 +212,7 @@ struct Diagnosis {
   std::vector<CauseEvidence> considered;     // the candidate causes, in catalogue order
   ModelFit baseline;                         // the calibrated baseline
   std::vector<Localisation> localisation;    // its residuals tested (step 3)
+  std::vector<PhaseLocalisation> phases;     // soil-bin cases: per stroke phase (step 3)
   std::vector<ModelFit> models;              // causes and pairs, most probable first
   std::optional<std::size_t> named_model;    // index into models of the named model (verdict Cause)
   std::vector<CalibrationShift> shifts;      // step 6, of the deciding fit
