@@ -3,9 +3,8 @@
 // eigen solution and an exact modal step response), with the effects a diagnosis must find built
 // in: a rotational spring at the clamp edge, Rayleigh damping C = alpha K + beta M (Eq 4: alpha_s
 // multiplies K, beta_per_s multiplies M), an unmodelled mass at the tip, and a gain and an offset
-// on each of the two channels. Written as a raw DAQ recording: t, force, deformation in DAQ units,
-// quantised to whole units, Gaussian noise and an optional mains hum, a resting baseline before the
-// weight is hung.
+// on each of the two channels. Written as a raw DAQ recording (daq_recording.hpp, shared with the
+// CalculiX generator of calculix_weight_drop.hpp).
 //
 // Beam: x from the clamp's lower edge (x = 0) to the tip (x = free_length). w(0) = 0; the root
 // rotation is fixed (rigid clamp) or held by the spring k_theta; the load cell holds w(prop) = 0 and
