@@ -150,7 +150,7 @@ inline Mesh mesh(const CalculixTool& t) {
   return m;
 }
 
-// Keypoints: corner nodes on the surface, by row (y ascending): lattice indices (i, j, k).
+// Keypoints: corner nodes on the surface, by row (y ascending).
 struct Keypoint {
   int node;
   Eigen::Vector3d x;
@@ -300,7 +300,7 @@ inline std::string deck(const CalculixTool& t, double pan_mass_kg) {
   return d.str();
 }
 
-// One block of a .dat file: the rows of numbers after a header line containing `key`.
+// One block of a .dat file: a header line and the rows of numbers after it.
 struct DatBlock {
   std::string header;
   std::vector<std::vector<double>> rows;
@@ -362,26 +362,23 @@ inline CalculixModes runDeck(const std::string& text, const CalculixTool& t) {
   };
   std::vector<DatBlock> sets;
   for (; b < blocks.size(); ++b)
-    if (blocks[b].header.find("for set") != std::string::npos) {
-      DatBlock block = blocks[b];
-      if (block.header.find("total force") != std::string::npos && block.rows.empty() && b + 1 < blocks.size()) block.rows = blocks[b + 1].rows;
-      sets.push_back(block);
-    }
+    if (blocks[b].header.find("for set") != std::string::npos) sets.push_back(blocks[b]);
   if (sets.size() != 4 * static_cast<std::size_t>(t.modes + 2)) throw std::runtime_error("ccx: unexpected output blocks in " + dir.string());
+  // The deformation and the load cell's z reaction of the displacement of the four blocks from `first`.
+  const auto sensor_mm = [&](std::size_t first) { return -1000 * (l.sensor_weight[0] * mean_uz(sets[first]) + l.sensor_weight[1] * mean_uz(sets[first + 1])); };
+  const auto reaction = [&](std::size_t first) { return sets[first + 3].rows.at(0).at(2); };
   const std::vector<double> uniform(l.pan.size(), 1.0 / static_cast<double>(l.pan.size()));
-  const auto read = [&](std::size_t first, double& sensor_mm, double& reaction, double& f_uniform, double& f_shift) {
-    sensor_mm = -1000 * (l.sensor_weight[0] * mean_uz(sets[first]) + l.sensor_weight[1] * mean_uz(sets[first + 1]));
-    f_uniform = pan_dot(sets[first + 2], uniform), f_shift = pan_dot(sets[first + 2], l.pan_shift);
-    reaction = sets[first + 3].rows.back().at(2);
-  };
   const auto n = static_cast<Eigen::Index>(t.modes);
   r.omega2 = Eigen::Map<const Eigen::VectorXd>(omega2.data(), n);
   r.sensor_mm.resize(n), r.reaction_N.resize(n), r.modal_force_uniform.resize(n), r.modal_force_shift.resize(n);
-  for (Eigen::Index j = 0; j < n; ++j)
-    read(4 * static_cast<std::size_t>(j), r.sensor_mm(j), r.reaction_N(j), r.modal_force_uniform(j), r.modal_force_shift(j));
-  double unused_a = 0, unused_b = 0;
-  read(4 * static_cast<std::size_t>(t.modes), r.static_sensor_uniform_mm, r.static_reaction_uniform, unused_a, unused_b);
-  read(4 * static_cast<std::size_t>(t.modes) + 4, r.static_sensor_shift_mm, r.static_reaction_shift, unused_a, unused_b);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const auto first = 4 * static_cast<std::size_t>(j);
+    r.sensor_mm(j) = sensor_mm(first), r.reaction_N(j) = reaction(first);
+    r.modal_force_uniform(j) = pan_dot(sets[first + 2], uniform), r.modal_force_shift(j) = pan_dot(sets[first + 2], l.pan_shift);
+  }
+  const auto statics = 4 * static_cast<std::size_t>(t.modes);
+  r.static_sensor_uniform_mm = sensor_mm(statics), r.static_reaction_uniform = reaction(statics);
+  r.static_sensor_shift_mm = sensor_mm(statics + 4), r.static_reaction_shift = reaction(statics + 4);
   std::filesystem::remove_all(dir);
   return r;
 }
