@@ -84,6 +84,9 @@ struct CalculixTool {
   int modes = 30;
   double reference_E_Pa = 4.06e9;  // the modulus ccx runs at (E by scaling, file comment)
 
+  // Damping ratio of a mode of angular frequency w (Eq 4).
+  double dampingRatio(double w) const { return alpha_s * w / 2 + beta_per_s / (2 * w); }
+
   // EI / L of the free part (clamp edge to tip), the scale of a clamp spring.
   double freeEIoverL() const {
     return E_Pa * width_m * std::pow(thickness_m, 3) / 12 / (length_m - clamp_length_m);
@@ -430,7 +433,7 @@ inline ChannelResponse calculixWeightDrop(const CalculixTool& t, double mass_kg,
     double sensor = rest_sensor * (t.alpha_s > 0 ? 1 - std::exp(-tau / t.alpha_s) : 1.0), reaction = rest_reaction;
     for (Eigen::Index j = 0; j < m.omega2.size(); ++j) {
       const double w = std::sqrt(m.omega2(j));
-      const ModalState s = modalStep(m.omega2(j), t.alpha_s * w / 2 + t.beta_per_s / (2 * w), f(j), tau);
+      const ModalState s = modalStep(m.omega2(j), t.dampingRatio(w), f(j), tau);
       sensor += m.sensor_mm(j) * s.q;
       reaction += m.reaction_N(j) * (s.q + t.alpha_s * s.qd);
     }

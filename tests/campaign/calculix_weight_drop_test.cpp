@@ -94,7 +94,7 @@ TEST_CASE("the CalculiX generator's null recording steps to its static solution"
   const auto d = analysis::fitStepResponse(rec.columns[0], deformation, "deformation");
   CHECK(f.steady == Approx(load * m.static_reaction_uniform).epsilon(1e-4));
   CHECK(d.steady == Approx(load * m.static_sensor_uniform_mm).epsilon(1e-4));
-  const double w = std::sqrt(m.omega2(0)), zeta = t.alpha_s * w / 2;
+  const double w = std::sqrt(m.omega2(0)), zeta = t.dampingRatio(w);
   CHECK(d.frequency_Hz == Approx(w * std::sqrt(1 - zeta * zeta) / (2 * std::numbers::pi)).epsilon(1e-5));
   CHECK(d.damping_ratio == Approx(zeta).epsilon(1e-3));
 }

@@ -1,9 +1,10 @@
 // Test fixture: the hidden effects of the recovery matrix (docs/diagnosis.md, "Recovery matrix").
-// Weight drops of the narrow PMMA tool (tests/campaign/data/narrow_weight_drop.json: 0.125 and
-// 0.25 kg, two repeats each) made by the independent CalculiX model of calculix_weight_drop.hpp
-// (the study's plate tool, C3D20R, on its own mesh) with effects drawn at random: every cause of the diagnosis' catalogue, pairs of them, effects outside the catalogue,
-// and none. Nothing here includes or assumes code of the diagnosis (campaign/, fem/); the raw
-// recording writer of analysis/ is the data format.
+// Weight drops of the narrow PMMA tool (tests/campaign/data/narrow_weight_drop.json: 0.125 and 0.25
+// kg, two repeats each) made by the independent CalculiX model of calculix_weight_drop.hpp (the
+// study's plate tool, C3D20R, on its own mesh) with effects drawn at random: every cause of the
+// diagnosis' catalogue, pairs of them, effects outside the catalogue, and none. Nothing here
+// includes or assumes code of the diagnosis (campaign/, fem/); the raw recording writer of
+// analysis/ is the data format.
 //
 // Each repeat is its own hanging of the weight: besides the DAQ noise (Gaussian, quantisation, a
 // mains hum) it scatters from repeat to repeat as a laboratory's repeats do (RepeatScatter: the
@@ -246,7 +247,7 @@ class Detectability {
         std::sqrt(std::pow(daq.deformation_noise_mm, 2) + quantum_d * quantum_d / 12 + std::pow(daq.deformation_hum_mm, 2) / 2)};
     nominal_ = hiddenResponses(HiddenTruth{nominal}, daq);
     for (double m : recoveryMasses_kg()) {
-      const double w = std::sqrt(calculixModes(nominal, m).omega2(0)), zeta = nominal.alpha_s * w / 2 + nominal.beta_per_s / (2 * w);
+      const double w = std::sqrt(calculixModes(nominal, m).omega2(0)), zeta = nominal.dampingRatio(w);
       const double f_d = w * std::sqrt(1 - zeta * zeta) / (2 * std::numbers::pi);
       const ChannelResponse steady = calculixWeightDrop(nominal, m, {1e3});
       for (int c = 0; c < 2; ++c) {
