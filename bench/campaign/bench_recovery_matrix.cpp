@@ -1,8 +1,9 @@
 // Recovery-matrix benchmark (docs/diagnosis.md, "Recovery matrix"): --draws hidden effects of master
 // seed --seed (tests/campaign/hidden_effects.hpp: single catalogue effects, pairs, effects outside
-// the catalogue and null cases in weight drops of the narrow PMMA tool, from an independent beam
-// model), each diagnosed by the `demfem diagnose` executable as a child process, --jobs at a time
-// (one thread each). Prints the matrix per catalogue entry, the acceptance targets with their
+// the catalogue and null cases in weight drops of the narrow PMMA tool, from an independent
+// CalculiX model), each diagnosed by the `demfem diagnose` executable as a child process (with the
+// generator's measured --model-form-percent, recovery_matrix.hpp), --jobs at a time (one thread
+// each). Prints the matrix per catalogue entry, the acceptance targets with their
 // one-sided 95 % Clopper-Pearson bounds, and every draw; --json writes the same.
 //
 // Resumable: every finished draw is appended to --log (JSON lines: seed, index, verdict, causes,

@@ -3,9 +3,8 @@
 // eigen solution and an exact modal step response), with the effects a diagnosis must find built
 // in: a rotational spring at the clamp edge, Rayleigh damping C = alpha K + beta M (Eq 4: alpha_s
 // multiplies K, beta_per_s multiplies M), an unmodelled mass at the tip, and a gain and an offset
-// on each of the two channels. Written as a raw DAQ recording: t, force, deformation in DAQ units,
-// quantised to whole units, Gaussian noise and an optional mains hum, a resting baseline before the
-// weight is hung.
+// on each of the two channels. Written as a raw DAQ recording (daq_recording.hpp, shared with the
+// CalculiX generator of calculix_weight_drop.hpp).
 //
 // Beam: x from the clamp's lower edge (x = 0) to the tip (x = free_length). w(0) = 0; the root
 // rotation is fixed (rigid clamp) or held by the spring k_theta; the load cell holds w(prop) = 0 and
@@ -19,16 +18,13 @@
 // the loaded sensor, the same at every weight), its gain multiplies the response.
 #pragma once
 
-#include "demfem/analysis/synthetic.hpp"
+#include "daq_recording.hpp"
 
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <numbers>
 #include <optional>
-#include <random>
 #include <vector>
 
 namespace demfem::campaign::test {
@@ -46,31 +42,6 @@ struct BeamTool {
   double tip_mass_kg = 0.0;                  // unmodelled: inertia on the pan nodes, no load
   double force_gain = 1.0, deformation_gain = 1.0;
   double force_offset_N = 0.0, deformation_offset_mm = 0.0;
-};
-
-struct Daq {
-  double sample_rate_Hz = 1000, duration_s = 3.0, drop_time_s = 0.2;
-  double force_factor_N_per_unit = 0.002, deformation_factor_mm_per_unit = 0.0002;
-  double force_noise_N = 0.002, deformation_noise_mm = 0.0002;
-  double force_hum_N = 0.0, deformation_hum_mm = 0.0, hum_Hz = 50;  // mains hum amplitude, random phase
-  std::uint64_t seed = 1;
-
-  // Sample times of a recording, and the time since the weight was hung at each (0 before).
-  std::vector<double> times_s() const {
-    std::vector<double> t;
-    const auto samples = static_cast<long>(std::lround(duration_s * sample_rate_Hz));
-    for (long i = 0; i < samples; ++i) t.push_back(static_cast<double>(i) / sample_rate_Hz);
-    return t;
-  }
-  std::vector<double> timesAfterDrop_s() const {
-    std::vector<double> after;
-    for (double t : times_s()) after.push_back(std::max(0.0, t - drop_time_s));
-    return after;
-  }
-};
-
-struct BeamResponse {
-  std::vector<double> t_s, force_N, deformation_mm;  // true channels (gains applied), no noise
 };
 
 // The beam with one weight hung: its free DOFs' modes (M-normalised), the modal load, and the rows
@@ -113,7 +84,7 @@ inline BeamModes beamModes(const BeamTool& b, double mass_kg) {
   for (int i : pan) spread += std::pow(i * h - mean_x, 2);
   for (int i : pan) {
     const double share = 1.0 / static_cast<double>(pan.size()) + (spread > 0 ? b.load_shift_m * (i * h - mean_x) / spread : 0.0);
-    F(2 * i) = mass_kg * 9.80665 * share, M(2 * i, 2 * i) += (mass_kg + b.tip_mass_kg) * share;
+    F(2 * i) = mass_kg * kStandardGravity_m_s2 * share, M(2 * i, 2 * i) += (mass_kg + b.tip_mass_kg) * share;
   }
   std::vector<int> fixed{0, 2 * prop}, free;
   if (!b.k_theta_Nm_per_rad) fixed.push_back(1);
@@ -141,27 +112,15 @@ inline BeamModes beamModes(const BeamTool& b, double mass_kg) {
   return m;
 }
 
-inline BeamResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std::vector<double>& t_after_drop) {
+inline ChannelResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std::vector<double>& t_after_drop) {
   const BeamModes m = beamModes(b, mass_kg);
   const Eigen::Index modes = m.omega2.size();
-  BeamResponse r;
+  ChannelResponse r;
   for (double t : t_after_drop) {
     Eigen::VectorXd q(modes), qd(modes), qdd(modes);
     for (Eigen::Index j = 0; j < modes; ++j) {
-      const double w = std::sqrt(m.omega2(j)), zeta = m.zeta(j);
-      if (zeta >= 1) {  // overdamped (the high modes under stiffness-proportional damping)
-        const double root = std::sqrt(zeta * zeta - 1), r1 = -w * (zeta - root), r2 = -w * (zeta + root);
-        const double s = m.modal_force(j) / m.omega2(j), e1 = std::exp(r1 * t), e2 = std::exp(r2 * t);
-        q(j) = s * (1 - (r2 * e1 - r1 * e2) / (r2 - r1));
-        qd(j) = -s * r1 * r2 * (e1 - e2) / (r2 - r1);
-        qdd(j) = -s * r1 * r2 * (r1 * e1 - r2 * e2) / (r2 - r1);
-        continue;
-      }
-      const double wd = w * std::sqrt(1 - zeta * zeta), s = m.modal_force(j) / m.omega2(j), decay = std::exp(-zeta * w * t);
-      const double c = std::cos(wd * t), sn = std::sin(wd * t), ratio = zeta / std::sqrt(1 - zeta * zeta);
-      q(j) = s * (1 - decay * (c + ratio * sn));
-      qd(j) = s * decay * (w / std::sqrt(1 - zeta * zeta)) * sn;
-      qdd(j) = s * w * w * decay * (c - ratio * sn);  // from q'' = -2 zeta w q' - w^2 (q - s)
+      const ModalState s = modalStep(m.omega2(j), m.zeta(j), m.modal_force(j), t);
+      q(j) = s.q, qd(j) = s.qd, qdd(j) = s.qdd;
     }
     const Eigen::VectorXd u = m.phi * q, ud = m.phi * qd, udd = m.phi * qdd;
     const double damping = b.alpha_s * m.Kp.dot(ud) + b.beta_per_s * m.Mp.dot(ud);
@@ -170,37 +129,6 @@ inline BeamResponse beamWeightDrop(const BeamTool& b, double mass_kg, const std:
     r.deformation_mm.push_back(1000 * m.sensor.dot(u) * b.deformation_gain + b.deformation_offset_mm);
   }
   return r;
-}
-
-// The raw recording of one weight from its channels (`r` at daq.timesAfterDrop_s()): resting
-// baseline, then the response; noise, hum and quantisation.
-inline analysis::SyntheticRecording daqRecording(const BeamResponse& r, double mass_kg, const Daq& daq, int repeat = 1) {
-  const std::vector<double> t = daq.times_s();
-  const std::uint64_t stream = daq.seed + static_cast<std::uint64_t>(repeat) * 7919;
-  std::mt19937_64 rng(stream), hum_rng(~stream);  // the hum's phases apart: the noise is as without hum
-  std::normal_distribution<double> noise(0.0, 1.0);
-  std::uniform_real_distribution<double> phase(0.0, 2 * std::numbers::pi);
-  const double force_phase = phase(hum_rng), deformation_phase = phase(hum_rng);
-  analysis::SyntheticRecording rec;
-  rec.header = {"t", "force", "deformation"};
-  rec.columns.assign(3, {});
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    const bool loaded = t[i] >= daq.drop_time_s;
-    const double hum = 2 * std::numbers::pi * daq.hum_Hz * t[i];
-    const double force = (loaded ? r.force_N[i] : 0.0) + daq.force_noise_N * noise(rng) + daq.force_hum_N * std::sin(hum + force_phase);
-    const double deformation = (loaded ? r.deformation_mm[i] : 0.0) + daq.deformation_noise_mm * noise(rng) +
-                               daq.deformation_hum_mm * std::sin(hum + deformation_phase);
-    rec.columns[0].push_back(t[i]);
-    rec.columns[1].push_back(std::round(force / daq.force_factor_N_per_unit));
-    rec.columns[2].push_back(std::round(deformation / daq.deformation_factor_mm_per_unit));
-  }
-  rec.sidecar = {{"tool", "tool"},
-                 {"mass_kg", mass_kg},
-                 {"sample_rate_hz", daq.sample_rate_Hz},
-                 {"force_factor", daq.force_factor_N_per_unit},
-                 {"deformation_factor", daq.deformation_factor_mm_per_unit},
-                 {"repeat", repeat}};
-  return rec;
 }
 
 // The raw recording of one weight hung on beam `b`.

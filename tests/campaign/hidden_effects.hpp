@@ -1,9 +1,10 @@
 // Test fixture: the hidden effects of the recovery matrix (docs/diagnosis.md, "Recovery matrix").
-// Weight drops of the narrow PMMA tool (tests/campaign/data/narrow_weight_drop.json: 0.125 and
-// 0.25 kg, two repeats each) made by the independent beam of beam_weight_drop.hpp with effects drawn
-// at random: every cause of the diagnosis' catalogue, pairs of them, effects outside the catalogue,
-// and none. Nothing here includes or assumes code of the diagnosis (campaign/, fem/); the raw
-// recording writer of analysis/ is the data format.
+// Weight drops of the narrow PMMA tool (tests/campaign/data/narrow_weight_drop.json: 0.125 and 0.25
+// kg, two repeats each) made by the independent CalculiX model of calculix_weight_drop.hpp (the
+// study's plate tool, C3D20R, on its own mesh) with effects drawn at random: every cause of the
+// diagnosis' catalogue, pairs of them, effects outside the catalogue, and none. Nothing here
+// includes or assumes code of the diagnosis (campaign/, fem/); the raw recording writer of
+// analysis/ is the data format.
 //
 // Each repeat is its own hanging of the weight: besides the DAQ noise (Gaussian, quantisation, a
 // mains hum) it scatters from repeat to repeat as a laboratory's repeats do (RepeatScatter: the
@@ -16,7 +17,7 @@
 // channel, the steady value, the damped frequency and the damping ratio of a one-mode step response
 // y0 + A (1 - exp(-zeta w_n tau) (cos w_d tau + zeta / sqrt(1 - zeta^2) sin w_d tau)), tau = t - t0
 // (with the nuisance parameters y0 and t0). Their standard errors (of the mean over the repeats):
-// the Cramer-Rao bound of that model at the nominal beam's first mode under the DAQ noise,
+// the Cramer-Rao bound of that model at the nominal tool's first mode under the DAQ noise,
 // sigma^2 (J^T J)^-1, J the model's Jacobian at the samples, sigma^2 = noise^2 + quantum^2 / 12 +
 // hum^2 / 2 per channel, plus the repeat scatter's variance (the squared first-order change of the
 // quantity for one standard deviation of each scatter term), over the number of repeats.
@@ -32,7 +33,7 @@
 // effect's physical range ends), its direction and channel at random.
 #pragma once
 
-#include "beam_weight_drop.hpp"
+#include "calculix_weight_drop.hpp"
 
 #include <Eigen/Dense>
 
@@ -137,38 +138,43 @@ struct RepeatScatter {
   double load_position_m = 0.0002;  // a hook in a notch of the pan
 };
 
-// The beam and the sensor chain the recordings are made from.
+// The nominal tool: the study's (tests/campaign/data/narrow_weight_drop.json).
+inline const CalculixTool& recoveryTool() {
+  static const CalculixTool tool = calculixToolFromStudy(std::filesystem::path(DEMFEM_SOURCE_DIR) / "tests/campaign/data/narrow_weight_drop.json");
+  return tool;
+}
+
+// The tool and the sensor chain the recordings are made from.
 struct HiddenTruth {
-  BeamTool tool;
+  CalculixTool tool;
   double modulus_load_slope = 0;  // E x (1 + slope (m - m_mid) / (m_heavy - m_mid))
   double lowpass_tau_s = 0;
   int lowpass_channel = 0;        // 0 force, 1 deformation
 };
 
-// Damped first-mode angular frequency of the nominal beam at each weight (lightest first).
-inline std::vector<double> firstModeOmegas(const BeamTool& nominal) {
+// First-mode angular frequency of the nominal tool at each weight (lightest first).
+inline std::vector<double> firstModeOmegas(const CalculixTool& nominal) {
   std::vector<double> w;
-  for (double m : recoveryMasses_kg()) w.push_back(std::sqrt(beamModes(nominal, m).omega2(0)));
+  for (double m : recoveryMasses_kg()) w.push_back(std::sqrt(calculixModes(nominal, m).omega2(0)));
   return w;
 }
 
 // The largest amount damping_form can take with alpha_s and beta_per_s both non-negative (variant 0:
-// the heavy weight's ratio raised; 1: the light weight's lowered), for a nominal beam with beta = 0.
-inline double dampingFormLimit(const BeamTool& nominal, int variant) {
+// the heavy weight's ratio raised; 1: the light weight's lowered), for a nominal tool with beta = 0.
+inline double dampingFormLimit(const CalculixTool& nominal, int variant) {
   const auto w = firstModeOmegas(nominal);
   const double ratio2 = std::pow(w[0] / w[1], 2);  // (light / heavy)^2 > 1
   return variant == 0 ? ratio2 - 1 : 1 - 1 / ratio2;
 }
 
-inline void applyEffect(const Effect& e, const BeamTool& nominal, HiddenTruth& h) {
+inline void applyEffect(const Effect& e, const CalculixTool& nominal, HiddenTruth& h) {
   const std::string id = e.info().id;
   const double sign = e.variant == 0 ? 1.0 : -1.0, a = e.amount;
-  BeamTool& b = h.tool;
+  CalculixTool& b = h.tool;
   if (id == "young_modulus") {
     b.E_Pa *= 1 + sign * a;
   } else if (id == "clamp_compliance") {
-    const double EI = nominal.E_Pa * nominal.width_m * std::pow(nominal.thickness_m, 3) / 12;
-    b.k_theta_Nm_per_rad = EI / (nominal.free_length_m * a);
+    b.k_theta_Nm_per_rad = nominal.freeEIoverL() / a;
   } else if (id == "mass_damping") {
     b.beta_per_s += a;
   } else if (id == "damping_form") {
@@ -200,7 +206,7 @@ inline void applyEffect(const Effect& e, const BeamTool& nominal, HiddenTruth& h
 }
 
 inline HiddenTruth hiddenTruth(const std::vector<Effect>& effects) {
-  const BeamTool nominal;
+  const CalculixTool& nominal = recoveryTool();
   HiddenTruth h{nominal};
   for (const Effect& e : effects) applyEffect(e, nominal, h);
   return h;
@@ -208,15 +214,15 @@ inline HiddenTruth hiddenTruth(const std::vector<Effect>& effects) {
 
 // The noiseless channels of every weight (recoveryMasses_kg()), at daq.timesAfterDrop_s(), zero
 // before the weight is hung.
-inline std::vector<BeamResponse> hiddenResponses(const HiddenTruth& h, const Daq& daq) {
+inline std::vector<ChannelResponse> hiddenResponses(const HiddenTruth& h, const Daq& daq) {
   const auto& masses = recoveryMasses_kg();
   const double mid = 0.5 * (masses.front() + masses.back()), half = masses.back() - mid;
   const std::vector<double> t = daq.times_s();
-  std::vector<BeamResponse> out;
+  std::vector<ChannelResponse> out;
   for (double m : masses) {
-    BeamTool b = h.tool;
+    CalculixTool b = h.tool;
     b.E_Pa *= 1 + h.modulus_load_slope * (m - mid) / half;
-    BeamResponse r = beamWeightDrop(b, m, daq.timesAfterDrop_s());
+    ChannelResponse r = calculixWeightDrop(b, m, daq.timesAfterDrop_s());
     for (std::size_t i = 0; i < t.size(); ++i)
       if (t[i] < daq.drop_time_s) r.force_N[i] = r.deformation_mm[i] = 0;
     if (h.lowpass_tau_s > 0) {
@@ -233,7 +239,7 @@ inline std::vector<BeamResponse> hiddenResponses(const HiddenTruth& h, const Daq
 class Detectability {
  public:
   explicit Detectability(const Daq& daq) : daq_(daq) {
-    const BeamTool nominal;
+    const CalculixTool& nominal = recoveryTool();
     const std::vector<double> t = daq.times_s();
     const double quantum_F = daq.force_factor_N_per_unit, quantum_d = daq.deformation_factor_mm_per_unit;
     const std::array<double, 2> sigma{
@@ -241,9 +247,9 @@ class Detectability {
         std::sqrt(std::pow(daq.deformation_noise_mm, 2) + quantum_d * quantum_d / 12 + std::pow(daq.deformation_hum_mm, 2) / 2)};
     nominal_ = hiddenResponses(HiddenTruth{nominal}, daq);
     for (double m : recoveryMasses_kg()) {
-      const BeamModes modes = beamModes(nominal, m);
-      const double zeta = modes.zeta(0), f_d = std::sqrt(modes.omega2(0) * (1 - zeta * zeta)) / (2 * std::numbers::pi);
-      const BeamResponse steady = beamWeightDrop(nominal, m, {1e3});
+      const double w = std::sqrt(calculixModes(nominal, m).omega2(0)), zeta = nominal.dampingRatio(w);
+      const double f_d = w * std::sqrt(1 - zeta * zeta) / (2 * std::numbers::pi);
+      const ChannelResponse steady = calculixWeightDrop(nominal, m, {1e3});
       for (int c = 0; c < 2; ++c) {
         const double A = c == 0 ? steady.force_N[0] : steady.deformation_mm[0];
         const Eigen::Matrix<double, 5, 1> theta(0.0, A, daq.drop_time_s, f_d, zeta);
@@ -278,7 +284,7 @@ class Detectability {
   }
 
   // Per weight and channel (weight-major, force first): the first-order change of (A, f_d, zeta).
-  std::vector<Eigen::Vector3d> quantityChanges(const std::vector<BeamResponse>& responses) const {
+  std::vector<Eigen::Vector3d> quantityChanges(const std::vector<ChannelResponse>& responses) const {
     std::vector<Eigen::Vector3d> out;
     for (std::size_t w = 0; w < responses.size(); ++w)
       for (int c = 0; c < 2; ++c) {
@@ -294,7 +300,7 @@ class Detectability {
 
   // max over weights, channels and quantities (steady value, frequency, damping ratio) of
   // |change| / standard error.
-  double largestZ(const std::vector<BeamResponse>& responses) const {
+  double largestZ(const std::vector<ChannelResponse>& responses) const {
     const auto changes = quantityChanges(responses);
     double z = 0;
     for (std::size_t k = 0; k < changes.size(); ++k) z = std::max(z, changes[k].cwiseAbs().cwiseQuotient(channels_[k].std_error).maxCoeff());
@@ -318,14 +324,14 @@ class Detectability {
   }
 
   Daq daq_;
-  std::vector<BeamResponse> nominal_;
+  std::vector<ChannelResponse> nominal_;
   std::vector<Channel> channels_;  // weight-major, force then deformation
 };
 
 // The largest amount an effect may take (its physical range), or infinity.
 inline double amountLimit(int kind, int variant) {
   const std::string id = effectKinds()[static_cast<std::size_t>(kind)].id;
-  if (id == "damping_form") return 0.9 * dampingFormLimit(BeamTool{}, variant);
+  if (id == "damping_form") return 0.9 * dampingFormLimit(recoveryTool(), variant);
   if (id == "young_modulus" || id == "force_sensor_gain" || id == "deformation_sensor_gain" || id == "load_dependent_modulus")
     return variant == 0 ? 1.0 : 0.9;
   return std::numeric_limits<double>::infinity();

@@ -90,6 +90,10 @@ struct RunSettings {
   std::string demfem;      // the executable
   fs::path study;          // narrow_weight_drop.json
   int diagnosis_jobs = 1;  // --jobs of each diagnosis
+  // --model-form-percent: what the generator's null differs from the project's plate model by, the
+  // largest residual of the calibrated baseline on a noiseless null (0.025 %, the light weight's
+  // frequency; docs/diagnosis.md, "Recovery matrix"), rounded up.
+  std::string model_form_percent = "0.03";
   std::chrono::seconds limit{900};
 };
 
@@ -100,7 +104,7 @@ inline Answer diagnoseDraw(const Draw& d, const fs::path& work, const RunSetting
   writeDrawRecordings(d, work / "recordings");
   const auto start = std::chrono::steady_clock::now();
   const int status = runProcess({s.demfem, "diagnose", s.study.string(), (work / "recordings").string(), "--json", (work / "diagnosis.json").string(),
-                                 "--out", (work / "out").string(), "--no-plots", "--quiet", "--jobs", std::to_string(s.diagnosis_jobs)},
+                                 "--out", (work / "out").string(), "--no-plots", "--quiet", "--jobs", std::to_string(s.diagnosis_jobs), "--model-form-percent", s.model_form_percent},
                                 work / "diagnose", s.limit);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Answer a;

@@ -1,7 +1,8 @@
 // The recovery matrix as an acceptance test of `demfem diagnose` (docs/diagnosis.md, "Recovery
 // matrix"): the first 30 draws of master seed 1 (12 single catalogue effects, 6 pairs, 6 effects
-// outside the catalogue, 6 null cases) from the independent beam generator, each diagnosed by the
-// executable as a child process (two at a time, one thread each). The matrix is written to
+// outside the catalogue, 6 null cases) from the independent CalculiX generator, each diagnosed by
+// the executable as a child process (two at a time, one thread each, with the generator's measured
+// model-form tolerance). The matrix is written to
 // recovery_matrix/ in the build directory (matrix.csv, matrix.md, draws.json) and printed. Each
 // target (power >= 95 % at twice the detectable size, false discoveries <= 5 %, null false alarms
 // <= 5 %, effects outside the catalogue answered "unexplained" >= 90 %, both members of a pair
