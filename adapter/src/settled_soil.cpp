@@ -14,6 +14,9 @@
 #include <iterator>
 #include <numbers>
 #include <stdexcept>
+#include <cerrno>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 namespace demfem::adapter {
@@ -130,6 +133,24 @@ void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil
   } catch (const OutputError& e) {
     throw std::runtime_error("settled soil file " + file.string() + ": " + e.what());
   }
+}
+
+bool depositOnce(const std::filesystem::path& file, const std::function<SettledSoil()>& deposit, bool replace) {
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
+  const std::filesystem::path lock = file.string() + ".lock";
+  const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("settled soil lock " + lock.string() + ": cannot open (" + std::strerror(errno) + ")");
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }  // closing the descriptor drops the lock
+  } closer{fd};
+  int status;
+  while ((status = ::flock(fd, LOCK_EX)) != 0 && errno == EINTR) {
+  }
+  if (status != 0) throw std::runtime_error("settled soil lock " + lock.string() + ": cannot lock (" + std::strerror(errno) + ")");
+  if (std::filesystem::exists(file) && !replace) return false;
+  writeSettledSoil(file, deposit());
+  return true;
 }
 
 SettledSoil readSettledSoil(const std::filesystem::path& file) {

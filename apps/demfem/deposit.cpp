@@ -72,7 +72,9 @@ void addDepositCommand(CLI::App& app) {
                   "its soil.deposition.backend names the same backend")
       ->check(CLI::IsMember(soil_backends));
   cmd->add_option("--soil-dir", opt->soil_dir, "Directory of settled soils (default: $DEMFEM_SOIL_DIR or ./soil)");
-  cmd->add_option("--threads", opt->threads, "threads of the built-in deposition (default: the study's /dem/threads)")
+  cmd->add_option("--threads", opt->threads,
+                  "threads of the built-in deposition (default: the study's /soil/deposition/threads); they are part of "
+                  "the soil hash, so another count is another soil file")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--force", opt->force, "Deposit again even if the file exists");
   cmd->add_flag("--quiet", opt->quiet, "No progress output");
@@ -83,6 +85,7 @@ void addDepositCommand(CLI::App& app) {
       s.soil.deposition_backend = opt->backend;
       checkBackends(s);  // the laws of the study in the backend that deposits
     }
+    if (opt->threads > 0) s.soil.deposition_threads = opt->threads;
     const std::filesystem::path dir =
         opt->soil_dir.empty() ? adapter::defaultSoilDirectory() : std::filesystem::path(opt->soil_dir);
     const auto file = adapter::settledSoilFile(s, dir);
@@ -93,11 +96,17 @@ void addDepositCommand(CLI::App& app) {
       writeJson(json_target, reportJson(opt->study_file, file, soil, true));
       return;
     }
-    const int threads = opt->threads > 0 ? opt->threads : s.dem.threads;
     DepositCost cost;
     const auto start = std::chrono::steady_clock::now();
-    const auto soil = depositWith(s.soil.deposition_backend, s, threads, cost, opt->quiet);
-    adapter::writeSettledSoil(file, soil);
+    adapter::SettledSoil soil;
+    const bool deposited = adapter::depositOnce(
+        file, [&] { return soil = depositWith(s.soil.deposition_backend, s, s.soil.deposition_threads, cost, opt->quiet); }, opt->force);
+    if (!deposited) {  // another process deposited it while this one waited for the lock
+      soil = adapter::readSettledSoil(file, s);
+      if (text) std::cout << "already deposited: ", printSoil(file, soil);
+      writeJson(json_target, reportJson(opt->study_file, file, soil, true));
+      return;
+    }
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (text) {
       printSoil(file, soil);

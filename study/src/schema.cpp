@@ -451,7 +451,10 @@ const Section<Soil>& depositionSection() {
         "(docs/builtin-dem.md, \"Soil deposition and reuse\")"},
        {"backend", &Soil::deposition_backend, Need::Optional, {}, {}, always(), {},
         "the DEM backend that deposits the settled soil; every DEM backend starts from that one soil file "
-        "(docs/builtin-dem.md, \"Settled soil file\")"}}};
+        "(docs/builtin-dem.md, \"Settled soil file\")"},
+       {"threads", &Soil::deposition_threads, Need::Optional, {}, {1, kMaxThreads}, always(), {},
+        "threads of the built-in deposition; the packing's bits depend on them, so they are part of the soil "
+        "hash (a run's own /dem/threads never picks another soil)"}}};
   return s;
 }
 

@@ -6,11 +6,14 @@
 
 #include <catch2/catch.hpp>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <numbers>
+#include <thread>
 #include <unistd.h>
 
 namespace {
@@ -125,6 +128,27 @@ TEST_CASE("a soil of another study or with a layer the study lacks is refused", 
   adapter::writeSettledSoil(file, soil);
   CHECK(adapter::readSettledSoil(file, s).particles.size() == 1);
   CHECK(adapter::settledSoilFile(s, "dir") == fs::path("dir") / ("soil-" + study::soilHash(s) + ".bin"));
+}
+
+TEST_CASE("two depositions of one soil at once deposit it once; the second waits and reuses the file", "[adapter][soil]") {
+  const auto file = scratch("once.bin");
+  std::atomic<int> depositions{0};
+  const auto deposit = [&] {
+    ++depositions;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the second caller arrives meanwhile
+    return sample();
+  };
+  bool first = false, second = false;
+  std::thread a([&] { first = adapter::depositOnce(file, deposit); });
+  std::thread b([&] { second = adapter::depositOnce(file, deposit); });
+  a.join();
+  b.join();
+  CHECK(depositions == 1);
+  CHECK(first != second);
+  CHECK(adapter::readSettledSoil(file) == sample());
+  CHECK_FALSE(adapter::depositOnce(file, deposit));  // kept
+  CHECK(adapter::depositOnce(file, deposit, true));   // --force
+  CHECK(depositions == 2);
 }
 
 TEST_CASE("a soil is settled only if its final phase met the threshold within its cap", "[adapter][soil]") {

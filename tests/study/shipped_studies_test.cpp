@@ -199,8 +199,11 @@ TEST_CASE("the soil hash is stable and depends on the soil only", "[study]") {
   wall["soil"]["materials"][4]["E_Pa"] = 2.05e11;  // steel: the bin
   CHECK(hashOf(wall) != reference);
   nlohmann::json threads = doc;
-  threads["dem"]["threads"] = 2;  // one soil for every core count
+  threads["dem"]["threads"] = 2;  // one soil for every run's core count
   CHECK(hashOf(threads) == reference);
+  nlohmann::json deposition_threads = doc;
+  deposition_threads["soil"]["deposition"]["threads"] = 2;  // the packing's bits depend on them
+  CHECK(hashOf(deposition_threads) != reference);
   // Both backends run the same soil; another deposition backend makes another soil.
   const nlohmann::json quick = readJson(kStudies / "quick_liggghts.json");
   nlohmann::json run_backend = quick, deposition_backend = quick;

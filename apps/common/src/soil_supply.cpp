@@ -25,7 +25,7 @@ void provideSoil(const study::Study& study, const std::string& backend) {
   if (std::filesystem::exists(file) || deposition == backend) return;
   std::cerr << "depositing the soil with " << deposition << " into " << file.string() << std::endl;
   DepositCost cost;
-  adapter::writeSettledSoil(file, depositWith(study.soil.deposition_backend, study, study.dem.threads, cost, false));
+  adapter::depositOnce(file, [&] { return depositWith(study.soil.deposition_backend, study, study.soil.deposition_threads, cost, false); });
 }
 
 }  // namespace

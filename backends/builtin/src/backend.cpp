@@ -283,8 +283,10 @@ std::filesystem::path settledSoilOf(const study::Study& study, const DepositProg
       throw CouplingError(ErrorCode::BadRequest,
                           "builtin DEM: no settled soil " + file.string() + "; the study deposits it with " + study.soil.deposition_backend +
                               " (/soil/deposition/backend): run `demfem deposit` on the study first");
-    DepositReport report;
-    adapter::writeSettledSoil(file, depositSoil(study, study.dem.threads, report, deposit_progress));
+    adapter::depositOnce(file, [&] {
+      DepositReport report;
+      return depositSoil(study, study.soil.deposition_threads, report, deposit_progress);
+    });
   }
   return file;
 }

@@ -21,7 +21,8 @@
 // - writeSettledSoil() writes under a unique temporary name in the same directory and renames, so a
 //   reader never sees half a file; every write is checked.
 // - The file of a study is settledSoilFile(study, dir) = dir / ("soil-" + soilHash + ".bin"), the
-//   same name for every backend and core count (the hash leaves out dem.backend and dem.threads).
+//   same name for every backend and every run's core count (the hash leaves out dem.backend and
+//   dem.threads, and holds soil.deposition.threads, the deposition's own). depositOnce() writes it.
 #pragma once
 
 #include "demfem/study/study.hpp"
@@ -29,6 +30,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -75,6 +77,14 @@ struct SettledSoil {
 };
 
 void writeSettledSoil(const std::filesystem::path& file, const SettledSoil& soil);
+
+// Deposits the settled soil `file` once: under an exclusive lock on `file` + ".lock" (flock,
+// waiting for a process that holds it), `deposit()` runs and its soil is written only when the file
+// does not exist (or `replace`); a process that waited finds the file and reuses it, so two
+// depositions of one soil never both run and a reader never sees the file replaced by another
+// packing. Returns whether this call deposited. Throws std::runtime_error naming the lock file when
+// it cannot be opened or locked; what `deposit` or the write throws passes through.
+bool depositOnce(const std::filesystem::path& file, const std::function<SettledSoil()>& deposit, bool replace = false);
 SettledSoil readSettledSoil(const std::filesystem::path& file);
 // Same, and the soil must be the study's: same soil hash, every layer index in soil.layers.
 SettledSoil readSettledSoil(const std::filesystem::path& file, const study::Study& study);

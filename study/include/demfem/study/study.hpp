@@ -128,6 +128,9 @@ struct Soil {
   // registry, study/backend_capabilities.hpp): every DEM backend starts from that one settled soil
   // (the backend-neutral file of adapter/settled_soil.hpp).
   std::string deposition_backend = "builtin";
+  // Threads of the built-in deposition (soil.deposition.threads): the packing's bits depend on them,
+  // so they enter the soil hash, and a run's own thread count never picks another soil.
+  int deposition_threads = 1;
   bool operator==(const Soil&) const = default;
 };
 
@@ -328,9 +331,10 @@ std::string describe(const Study& study);
 // Stable content hash of everything that determines the settled soil (for deposit reuse): FNV-1a
 // 64 of the canonical JSON text (sorted keys, shortest round-trip numbers) of the bin, fill height,
 // particle sizes, the particle and bin materials, layers, the interactions among them, the contact
-// model, the deposition settings (seed, threshold, deposition backend) and the DEM time step
-// settings, as identityJson() writes them. Tools, the run's DEM backend (dem.backend), dem.seed and
-// dem.threads do not enter: one soil serves every backend and core count. 16 lowercase hex digits.
+// model, the deposition settings (seed, threshold, bulk density, deposition backend and threads)
+// and the DEM time step settings, as identityJson() writes them. Tools, the run's DEM backend
+// (dem.backend), dem.seed and dem.threads do not enter: one soil serves every backend and every
+// run's core count. 16 lowercase hex digits.
 // Throws std::invalid_argument for kinds without soil.
 std::string soilHash(const Study& study);
 
