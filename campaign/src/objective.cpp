@@ -18,15 +18,41 @@ struct Estimate {
 
 using CaseEstimates = std::map<std::string, std::vector<Estimate>>;
 
-// Mean over repeats and the scatter of that mean (header comment).
-Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::vector<Estimate>& repeats, const ObjectiveSettings& settings) {
+// The repeats' mean and their sample variance (0 for one repeat).
+std::pair<double, double> meanAndVariance(const std::vector<Estimate>& repeats) {
   const auto R = static_cast<double>(repeats.size());
-  double mean = 0, own = 0;
-  for (const auto& e : repeats) mean += e.value / R, own += e.error * e.error / R;
-  double between = 0;
-  if (repeats.size() > 1) {
-    for (const auto& e : repeats) between += (e.value - mean) * (e.value - mean) / (R - 1);
-  }
+  double mean = 0, variance = 0;
+  for (const auto& e : repeats) mean += e.value / R;
+  if (repeats.size() > 1)
+    for (const auto& e : repeats) variance += (e.value - mean) * (e.value - mean) / (R - 1);
+  return {mean, variance};
+}
+
+// Per quantity name, the between-repeat variance relative to the mean squared, pooled over the
+// cases with two or more repeats (weighted by their degrees of freedom; header comment).
+std::map<std::string, double> pooledRelativeVariance(const std::map<analysis::CaseKey, std::map<std::string, std::vector<Estimate>>>& cases) {
+  std::map<std::string, std::pair<double, double>> sums;  // name -> (sum dof x relative variance, sum dof)
+  for (const auto& [key, estimates] : cases)
+    for (const auto& [name, repeats] : estimates) {
+      const auto [mean, variance] = meanAndVariance(repeats);
+      if (repeats.size() < 2 || mean == 0) continue;
+      const double dof = static_cast<double>(repeats.size() - 1);
+      sums[name].first += dof * variance / (mean * mean);
+      sums[name].second += dof;
+    }
+  std::map<std::string, double> out;
+  for (const auto& [name, sum] : sums) out[name] = sum.first / sum.second;
+  return out;
+}
+
+// Mean over repeats and the scatter of that mean (header comment).
+Quantity pool(const analysis::CaseKey& key, const std::string& name, const std::vector<Estimate>& repeats, double pooled_relative_variance,
+              const ObjectiveSettings& settings) {
+  const auto R = static_cast<double>(repeats.size());
+  const auto [mean, own_between] = meanAndVariance(repeats);
+  double own = 0;
+  for (const auto& e : repeats) own += e.error * e.error / R;
+  const double between = repeats.size() > 1 ? std::max(own_between, pooled_relative_variance * mean * mean) : 0.0;
   const auto relative = settings.model_form_relative.find(name);
   const double form = relative == settings.model_form_relative.end() ? 0.0 : relative->second * mean;
   const double sigma = std::sqrt(std::max(between, own) / R + form * form);
@@ -111,10 +137,12 @@ std::vector<Quantity> quantities(const std::vector<analysis::Recording>& recordi
     }
     for (auto& [name, estimates] : one) cases[rec.key][name].push_back(estimates.front());
   }
+  const std::map<std::string, double> pooled = pooledRelativeVariance(cases);
   std::vector<Quantity> out;
   for (const auto& [key, estimates] : cases)
     for (const auto& name : kept)
-      if (auto it = estimates.find(name); it != estimates.end()) out.push_back(pool(key, name, it->second, settings));
+      if (auto it = estimates.find(name); it != estimates.end())
+        out.push_back(pool(key, name, it->second, pooled.count(name) ? pooled.at(name) : 0.0, settings));
   return out;
 }
 

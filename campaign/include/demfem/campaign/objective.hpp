@@ -15,6 +15,10 @@
 // - window means: sqrt(max(s_between^2, sd^2 / N_window) / R), sd the standard deviation of a
 //   repeat's window samples, N_window their number;
 // - window spreads: max(s_between, sd / sqrt(2 (N_window - 1))) / sqrt(R);
+// where s_between^2 is at least the quantity's between-repeat variance relative to the mean,
+// pooled over every case with two or more repeats, times the case's mean squared (with two repeats
+// a case's own spread has one degree of freedom and comes out small by chance: repeats that happen
+// to agree would make a residual of ordinary size look significant, docs/diagnosis.md),
 // and never below `relative_floor` |value| (a noise-free recording would otherwise get an infinite
 // weight; the floor is stated in the report). A stated model-form tolerance widens it to
 // sqrt(sigma^2 + (m value)^2), m the quantity's entry of `model_form_relative` (none: 0; a diagnosis
