@@ -1,5 +1,6 @@
 #include "demfem/fem/coupled_driver.hpp"
 
+#include "demfem/adapter/checkpoint_file.hpp"
 #include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/tool_drive.hpp"
 #include "demfem/fem/modal.hpp"
@@ -29,6 +30,7 @@ using adapter::NodeArray;
 namespace {
 
 constexpr char kCheckpointMagic[] = "demfem-coupled-fem-state-4";
+constexpr char kFemStateKind[] = "fem-state";  // the checkpoint container's kind of fem_state.bin
 
 std::string number(double v) {
   char text[32];
@@ -405,7 +407,8 @@ struct CoupledDriver::Impl {
       for (const Eigen::VectorXd& v : st.vectors) writeVector(out, v);
     }
     put(out, last_);
-    adapter::writeFileAtomically(checkpointDir() / "fem_state.bin", out.str());  // commits the checkpoint
+    // The checkpoint container (size and checksum, adapter/checkpoint_file.hpp); writing it commits the checkpoint.
+    adapter::writeCheckpointFile(checkpointDir() / "fem_state.bin", kFemStateKind, out.str());
     // `demfem run` gives the DEM this checkpoint directory; elsewhere there is nothing here to remove.
     if (last_checkpoint_step_ >= 0) fs::remove(checkpointDir() / demCheckpoint(last_checkpoint_step_));
     last_checkpoint_step_ = s.step;
@@ -416,8 +419,8 @@ struct CoupledDriver::Impl {
 
   DriverState restoreCheckpoint() {
     const fs::path file = checkpointDir() / "fem_state.bin";
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw std::runtime_error("cannot resume: no checkpoint " + file.string());
+    if (!fs::exists(file)) throw std::runtime_error("cannot resume: no checkpoint " + file.string());
+    std::istringstream in(adapter::readCheckpointFile(file, kFemStateKind, "cannot resume: FEM checkpoint"), std::ios::binary);
     char magic[sizeof kCheckpointMagic] = {};
     in.read(magic, sizeof magic);
     if (std::memcmp(magic, kCheckpointMagic, sizeof magic) != 0)
@@ -439,6 +442,7 @@ struct CoupledDriver::Impl {
     }
     last_ = get<SensorReadings>(in);
     if (!in) throw std::runtime_error(file.string() + " is truncated");
+    if (in.peek() != std::char_traits<char>::eof()) throw std::runtime_error(file.string() + ": bytes left over after the FEM state");
     // The DEM's checkpoint holds the tool's motion, node positions and their velocity: nothing is
     // re-sent (a re-sent position would reset the deformation velocity, a recomputed motion its t0).
     dem().restore(demCheckpoint(s.step));

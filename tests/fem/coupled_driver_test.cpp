@@ -150,3 +150,44 @@ TEST_CASE("a run cut short by max_steps is marked incomplete with the steps it d
   CHECK(text.str().find("\n# incomplete: " + reason + "\n") != std::string::npos);
   std::filesystem::remove_all(out);
 }
+
+TEST_CASE("a resume from an edited FEM checkpoint is refused before anything changes", "[fem]") {
+  // fem_state.bin carries the checkpoint container's size and checksum: one edited field (here a
+  // byte of the output sizes) used to give a run marked complete with a merged CSV row.
+  const study::Study study = smallQuickStudy();
+  const auto out = std::filesystem::temp_directory_path() / "demfem-driver-edited-checkpoint-test";
+  std::filesystem::remove_all(out);
+  std::filesystem::create_directories(out);
+  const auto previous = std::filesystem::current_path();
+  std::filesystem::current_path(out);  // the test backend keeps its DEM checkpoints here
+  fem::CoupledRunOptions options;
+  options.output_dir = out / "run";
+  options.checkpoint_every = 5;
+  const auto plan = study::planToolMotion(study, study.tools[0]);
+  options.max_steps = plan.insertion_steps + 7;
+  {
+    auto dem = adapter::makeTestBackend("harmonic", study.tools, adapter::TestLoad{});
+    fem::CoupledDriver(study, options).run(*dem);
+  }
+  const auto file = options.output_dir / "checkpoint" / "fem_state.bin";
+  REQUIRE(std::filesystem::exists(file));
+  std::string bytes;
+  {
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string csv_before = [&] {
+    std::ifstream in(options.output_dir / "sensors.csv");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  bytes[bytes.size() - 20] ^= 0x01;
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+  options.resume = true;
+  options.max_steps.reset();
+  auto dem = adapter::makeTestBackend("harmonic", study.tools, adapter::TestLoad{});
+  CHECK_THROWS_WITH(fem::CoupledDriver(study, options).run(*dem), Catch::Contains("fem_state.bin") && Catch::Contains("checksum"));
+  std::ifstream in(options.output_dir / "sensors.csv");
+  CHECK(std::string(std::istreambuf_iterator<char>(in), {}) == csv_before);
+  std::filesystem::current_path(previous);
+  std::filesystem::remove_all(out);
+}
