@@ -17,7 +17,6 @@
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/liggghts/backend.hpp"
-#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
 
@@ -52,10 +51,8 @@ struct Bed {
 // measures its rms speed at the end and the largest displacement of a particle centre.
 void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double rest_s, int threads, Bed& bed) {
   builtin::DemSimulation sim(s.soil, builtin::binDomain(s.soil), threads);
-  builtin::addBinWalls(sim, s.soil);
-  builtin::addSettledParticles(sim, s.soil, soil);
-  sim.setTimeStep(study::demStepDividing(physics::demTimeStep(s).step_s, s.fem.dt_s));
-  sim.setRollingRegularisationStep(physics::rollingRegularisationStep(s));
+  builtin::loadSettledBed(sim, s.soil, soil);
+  builtin::setRunTimeStep(sim, s);
   std::vector<builtin::Vec3> start(sim.particleCount());
   for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
   const long steps = std::lround(rest_s / sim.timeStep());

@@ -2,6 +2,7 @@
 #include "demfem/backends/builtin/backend.hpp"
 
 #include "demfem/backends/physics/time_step.hpp"
+#include "demfem/study/tool_motion.hpp"
 
 #include <algorithm>
 #include <array>
@@ -40,6 +41,12 @@ constexpr int kSustainedChecks = 3;             // consecutive energy checks bel
 constexpr double kSettlingDamping_per_s = 20;   // the settling aid, -c m v and -c I w (KE e-folds in 25 ms)
 constexpr int kEnergyCheckSteps = 200;          // steps between kinetic-energy checks
 constexpr double kDepositionStepFraction = 0.1;  // of the stiffest spring's critical step, at least
+// The reload phase (docs/builtin-dem.md, "A bed at rest"): windows of kReloadWindow_s, the bed
+// reloaded as a run loads it before each, until a window moves no centre by more than
+// kReloadRestFraction of the smallest diameter, at most kMaxReloads windows.
+constexpr double kReloadWindow_s = 0.5;
+constexpr double kReloadRestFraction = 0.05;
+constexpr int kMaxReloads = 6;
 // The density protocol: the bed's bulk density within kDensityTolerance of the target, found over
 // at most kMaxDensityPours pours with a friction factor in [0, 1].
 constexpr double kDensityTolerance = 0.01;
@@ -155,6 +162,52 @@ std::vector<ParticleState> randomInsertion(std::mt19937_64& rng, std::size_t cou
   return out;
 }
 
+// The reload phase: `particles` loaded as `demfem run` loads a soil file (loadSettledBed(): positions
+// only, so no velocities and no contact history, at the run's step) and left alone for
+// kReloadWindow_s; then reloaded from where they ended, until a window moves no particle centre by
+// more than kReloadRestFraction of the smallest diameter (at most kMaxReloads windows). Loading
+// drops the contact history the final settling built (the tangential and rolling springs, the
+// hysteretic springs' plastic overlaps), so the first windows let the bed find the rest a run will
+// start from: perched grains held by spring history roll off. Replaces `particles` by the bed at
+// the end of the last window.
+struct ReloadFigures {
+  int windows = 0;
+  double largest_displacement_m = 0;  // in the last window
+  bool at_rest = false;
+  double kinetic_energy_J = 0, simulated_s = 0;
+  long steps = 0;
+};
+
+ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vector<adapter::SoilParticle>& particles) {
+  ReloadFigures out;
+  adapter::SettledSoil bed;
+  bed.particles = std::move(particles);
+  while (!out.at_rest && out.windows < kMaxReloads) {
+    DemSimulation sim(study.soil, binDomain(study.soil), threads);
+    loadSettledBed(sim, study.soil, bed);
+    setRunTimeStep(sim, study);
+    std::vector<Vec3> start(sim.particleCount());
+    for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
+    const long steps = std::lround(kReloadWindow_s / sim.timeStep());
+    sim.run(steps);
+    ++out.windows;
+    out.steps += steps;
+    out.simulated_s += sim.time();
+    out.largest_displacement_m = 0;
+    bed.particles.clear();
+    for (std::size_t i = 0; i < start.size(); ++i) {
+      const auto p = sim.particle(i);
+      out.largest_displacement_m =
+          std::max(out.largest_displacement_m, std::hypot(p.x[0] - start[i][0], p.x[1] - start[i][1], p.x[2] - start[i][2]));
+      bed.particles.push_back({p.x, p.radius, p.layer});
+    }
+    out.kinetic_energy_J = sim.kineticEnergy();
+    out.at_rest = out.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m;
+  }
+  particles = std::move(bed.particles);
+  return out;
+}
+
 // The study's soil with the inter-particle friction (static and rolling, pairs of layer materials)
 // times `scale`; walls keep theirs.
 study::Soil scaledFriction(const study::Soil& soil, double scale) {
@@ -198,7 +251,7 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
   const double stages = 2;  // the pour and the final settling
   adapter::SettledSoil out;
   out.settling.threshold_J = soil.settle_kinetic_energy_J;
-  out.settling.stages = 2;
+  out.settling.stages = 3;  // the pour, the final settling and the reload phase
   out.settling.pour_friction_scale = friction_scale;
   const auto line = [&](double fraction, const std::string& text) {
     if (progress) progress(fraction, text.empty() ? text : label + text);
@@ -307,13 +360,22 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
     const auto p = sim->particle(i);
     out.particles.push_back({p.x, p.radius, p.layer});
   }
-  out.settling.kinetic_energy_J = sim->kineticEnergy();
-  out.settling.simulated_s = (friction_scale != 1.0 ? pour_time : 0.0) + sim->time();
+  const ReloadFigures reload = reloadUntilAtRest(study, threads, out.particles);
+  if (!reload.at_rest) ++out.settling.stages_capped;
+  {
+    std::ostringstream text;
+    text << "reloaded as a run loads it: " << (reload.at_rest ? "at rest" : "not at rest") << " after " << reload.windows
+         << " windows of " << kReloadWindow_s << " s (largest displacement in the last " << reload.largest_displacement_m * 1e3
+         << " mm)";
+    line(1.0, text.str());
+  }
+  out.settling.kinetic_energy_J = reload.kinetic_energy_J;
+  out.settling.simulated_s = (friction_scale != 1.0 ? pour_time : 0.0) + sim->time() + reload.simulated_s;
   out.settling.surface_height_m = adapter::soilSurfaceHeight(out.particles, soil.diameter_max_m);
   out.settling.packing_fraction = adapter::packingFraction(out.particles, soil);
   out.settling.bulk_density_kg_m3 = adapter::bulkDensity(out.particles, soil);
   out.settling.coordination_number = adapter::meanCoordinationNumber(out.particles);
-  report.steps += (friction_scale != 1.0 ? pour_steps : 0) + sim->stepCount();
+  report.steps += (friction_scale != 1.0 ? pour_steps : 0) + sim->stepCount() + reload.steps;
   report.time_step_s = sim->timeStep();
   return out;
 }
@@ -396,6 +458,17 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
   throw std::runtime_error("/soil/deposition/bulk_density_kg_m3 = " + kgm3(target) + " was not reached within 1 % in " +
                            std::to_string(kMaxDensityPours) + " pours (" + tried.str() +
                            "): the bed's density does not follow the pour's friction closely enough here");
+}
+
+void loadSettledBed(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled) {
+  addBinWalls(sim, soil);
+  addSettledParticles(sim, soil, settled);
+}
+
+void setRunTimeStep(DemSimulation& sim, const study::Study& study) {
+  // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
+  sim.setTimeStep(study::demStepDividing(physics::demTimeStep(study).step_s, study.fem.dt_s));
+  sim.setRollingRegularisationStep(physics::rollingRegularisationStep(study));
 }
 
 void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled) {

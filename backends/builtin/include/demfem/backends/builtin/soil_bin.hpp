@@ -16,9 +16,14 @@
 //   that is still ringing. The step is the study's or a tenth of the stiffest spring's critical
 //   step, whichever is larger. Particles whose centre ends above the fill height are removed; the
 //   rest are tagged by the depth of their centre below the fill height with the layer (and that
-//   layer's material) covering that depth, and settle once more. The result carries its settling
-//   figures: stages = 2 (the pour and the final settling), those that hit their cap, the final total
-//   kinetic energy, surface height, packing fraction, bulk density and coordination number.
+//   layer's material) covering that depth, and settle once more. Then the reload phase: the bed
+//   loaded as a run loads it (loadSettledBed(), setRunTimeStep(): contact history dropped, the run's
+//   step) and left alone for 0.5 s, again and again from where it ended, until a window moves no
+//   particle centre by more than 0.05 of the smallest diameter (at most 6 windows; the bed is the
+//   end of the last). The result carries its settling figures: stages = 3 (the pour, the final
+//   settling and the reload phase), those that hit their cap (the reload phase: not at rest after 6
+//   windows), the total kinetic energy at the end, surface height, packing fraction, bulk density
+//   and coordination number.
 // - With soil.bulk_density_kg_m3 (kg/m^3) the density protocol: the plain pour, then pours with the
 //   inter-particle static and rolling friction times f in [0, 1) (walls keep theirs), f found by
 //   regula falsi until the bed's bulk density is within 1 % of the target (at most 8 pours), the
@@ -71,5 +76,12 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
 // Adds the settled particles to `sim` with their layer materials, in spatial order (cells of one
 // diameter, x fastest, then y, then z), not in the file's order.
 void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled);
+// The bed as `demfem run` loads a soil file: the bin's walls and addSettledParticles() (positions
+// only: no velocities, no contact history).
+void loadSettledBed(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled);
+// The run's steps: the study's DEM step shortened to divide the FEM step, and its rolling
+// regularisation step. Set after every wall, mesh and particle is in `sim` (the step is checked
+// against the stiffest of their springs).
+void setRunTimeStep(DemSimulation& sim, const study::Study& study);
 
 }  // namespace demfem::builtin
