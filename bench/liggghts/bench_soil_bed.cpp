@@ -47,36 +47,17 @@ struct Bed {
   std::size_t rest_moved_1mm = 0;                        // particles displaced more than 1 mm
 };
 
-// Leaves the bed alone for `rest_s` of simulated time (the study's laws, the run's step) and
-// measures its rms speed at the end and the largest displacement of a particle centre.
+// Leaves the bed alone for `rest_s` (builtin::measureRest: loaded as a run loads it, the study's
+// laws at the run's step) and keeps its figures.
 void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double rest_s, int threads, Bed& bed) {
-  builtin::DemSimulation sim(s.soil, builtin::binDomain(s.soil), threads);
-  builtin::loadSettledBed(sim, s.soil, soil);
-  builtin::setRunTimeStep(sim, s);
-  std::vector<builtin::Vec3> start(sim.particleCount());
-  for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
-  const long steps = std::lround(rest_s / sim.timeStep());
-  const long chunk = std::max(1L, steps / 20);
-  std::vector<builtin::Vec3> half;
-  for (long done = 0; done < steps; done += chunk) {
-    if (half.empty() && done >= steps / 2)
-      for (std::size_t i = 0; i < start.size(); ++i) half.push_back(sim.particle(i).x);
-    sim.run(std::min(chunk, steps - done));
-    std::cerr << "  rest: " << sim.time() << " s of " << rest_s << " s\r" << std::flush;
-  }
-  double v2 = 0, max_d = 0, late_d = 0;
-  for (std::size_t i = 0; i < start.size(); ++i) {
-    const auto p = sim.particle(i);
-    v2 += p.v[0] * p.v[0] + p.v[1] * p.v[1] + p.v[2] * p.v[2];
-    const double d = std::hypot(p.x[0] - start[i][0], p.x[1] - start[i][1], p.x[2] - start[i][2]);
-    max_d = std::max(max_d, d);
-    if (d > 1e-3) ++bed.rest_moved_1mm;
-    if (!half.empty()) late_d = std::max(late_d, std::hypot(p.x[0] - half[i][0], p.x[1] - half[i][1], p.x[2] - half[i][2]));
-  }
-  bed.rest_late_max_displacement_mm = 1e3 * late_d;
-  bed.rest_rms_speed_mm_s = 1e3 * std::sqrt(v2 / static_cast<double>(start.size()));
-  bed.rest_max_displacement_mm = 1e3 * max_d;
+  const auto rest = builtin::measureRest(s, soil, rest_s, threads, [rest_s](double fraction) {
+    std::cerr << "  rest: " << fraction * rest_s << " s of " << rest_s << " s\r" << std::flush;
+  });
   std::cerr << '\n';
+  bed.rest_rms_speed_mm_s = 1e3 * rest.rms_speed_m_s;
+  bed.rest_max_displacement_mm = 1e3 * rest.largest_displacement_m;
+  bed.rest_late_max_displacement_mm = 1e3 * rest.largest_late_displacement_m;
+  bed.rest_moved_1mm = rest.moved_over_1mm;
 }
 
 struct Stats {

@@ -162,9 +162,8 @@ std::vector<ParticleState> randomInsertion(std::mt19937_64& rng, std::size_t cou
   return out;
 }
 
-// The reload phase: `particles` loaded as `demfem run` loads a soil file (loadSettledBed(): positions
-// only, so no velocities and no contact history, at the run's step) and left alone for
-// kReloadWindow_s; then reloaded from where they ended, until a window moves no particle centre by
+// The reload phase: `particles` left alone as a run loads them (measureRest()) for
+// kReloadWindow_s, then again from where they ended, until a window moves no particle centre by
 // more than kReloadRestFraction of the smallest diameter (at most kMaxReloads windows). Loading
 // drops the contact history the final settling built (the tangential and rolling springs, the
 // hysteretic springs' plastic overlaps), so the first windows let the bed find the rest a run will
@@ -172,9 +171,9 @@ std::vector<ParticleState> randomInsertion(std::mt19937_64& rng, std::size_t cou
 // the end of the last window.
 struct ReloadFigures {
   int windows = 0;
-  double largest_displacement_m = 0;  // in the last window
   bool at_rest = false;
-  double kinetic_energy_J = 0, simulated_s = 0;
+  RestFigures last;  // the last window
+  double simulated_s = 0;
   long steps = 0;
 };
 
@@ -183,26 +182,12 @@ ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vec
   adapter::SettledSoil bed;
   bed.particles = std::move(particles);
   while (!out.at_rest && out.windows < kMaxReloads) {
-    DemSimulation sim(study.soil, binDomain(study.soil), threads);
-    loadSettledBed(sim, study.soil, bed);
-    setRunTimeStep(sim, study);
-    std::vector<Vec3> start(sim.particleCount());
-    for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
-    const long steps = std::lround(kReloadWindow_s / sim.timeStep());
-    sim.run(steps);
+    out.last = measureRest(study, bed, kReloadWindow_s, threads, {});
     ++out.windows;
-    out.steps += steps;
-    out.simulated_s += sim.time();
-    out.largest_displacement_m = 0;
-    bed.particles.clear();
-    for (std::size_t i = 0; i < start.size(); ++i) {
-      const auto p = sim.particle(i);
-      out.largest_displacement_m =
-          std::max(out.largest_displacement_m, std::hypot(p.x[0] - start[i][0], p.x[1] - start[i][1], p.x[2] - start[i][2]));
-      bed.particles.push_back({p.x, p.radius, p.layer});
-    }
-    out.kinetic_energy_J = sim.kineticEnergy();
-    out.at_rest = out.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m;
+    out.steps += out.last.steps;
+    out.simulated_s += kReloadWindow_s;
+    bed.particles = out.last.end;
+    out.at_rest = out.last.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m;
   }
   particles = std::move(bed.particles);
   return out;
@@ -365,11 +350,11 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
   {
     std::ostringstream text;
     text << "reloaded as a run loads it: " << (reload.at_rest ? "at rest" : "not at rest") << " after " << reload.windows
-         << " windows of " << kReloadWindow_s << " s (largest displacement in the last " << reload.largest_displacement_m * 1e3
+         << " windows of " << kReloadWindow_s << " s (largest displacement in the last " << reload.last.largest_displacement_m * 1e3
          << " mm)";
     line(1.0, text.str());
   }
-  out.settling.kinetic_energy_J = reload.kinetic_energy_J;
+  out.settling.kinetic_energy_J = reload.last.kinetic_energy_J;
   out.settling.simulated_s = (friction_scale != 1.0 ? pour_time : 0.0) + sim->time() + reload.simulated_s;
   out.settling.surface_height_m = adapter::soilSurfaceHeight(out.particles, soil.diameter_max_m);
   out.settling.packing_fraction = adapter::packingFraction(out.particles, soil);
@@ -469,6 +454,39 @@ void setRunTimeStep(DemSimulation& sim, const study::Study& study) {
   // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
   sim.setTimeStep(study::demStepDividing(physics::demTimeStep(study).step_s, study.fem.dt_s));
   sim.setRollingRegularisationStep(physics::rollingRegularisationStep(study));
+}
+
+RestFigures measureRest(const study::Study& study, const adapter::SettledSoil& settled, double rest_s, int threads,
+                        const std::function<void(double)>& tick) {
+  DemSimulation sim(study.soil, binDomain(study.soil), threads);
+  loadSettledBed(sim, study.soil, settled);
+  setRunTimeStep(sim, study);
+  std::vector<Vec3> start(sim.particleCount()), half;
+  for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
+  const long steps = std::lround(rest_s / sim.timeStep());
+  const long chunk = std::max(1L, steps / 20);
+  for (long done = 0; done < steps; done += chunk) {
+    if (half.empty() && done >= steps / 2)
+      for (std::size_t i = 0; i < start.size(); ++i) half.push_back(sim.particle(i).x);
+    sim.run(std::min(chunk, steps - done));
+    if (tick) tick(sim.time() / rest_s);
+  }
+  const auto distance = [](const Vec3& a, const Vec3& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); };
+  RestFigures out;
+  out.steps = steps;
+  double v2 = 0;
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    const auto p = sim.particle(i);
+    v2 += p.v[0] * p.v[0] + p.v[1] * p.v[1] + p.v[2] * p.v[2];
+    const double d = distance(p.x, start[i]);
+    out.largest_displacement_m = std::max(out.largest_displacement_m, d);
+    if (d > 1e-3) ++out.moved_over_1mm;
+    if (!half.empty()) out.largest_late_displacement_m = std::max(out.largest_late_displacement_m, distance(p.x, half[i]));
+    out.end.push_back({p.x, p.radius, p.layer});
+  }
+  out.rms_speed_m_s = start.empty() ? 0.0 : std::sqrt(v2 / static_cast<double>(start.size()));
+  out.kinetic_energy_J = sim.kineticEnergy();
+  return out;
 }
 
 void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled) {

@@ -84,4 +84,19 @@ void loadSettledBed(DemSimulation& sim, const study::Soil& soil, const adapter::
 // against the stiffest of their springs).
 void setRunTimeStep(DemSimulation& sim, const study::Study& study);
 
+// A bed at rest (docs/builtin-dem.md, "A bed at rest"): `settled` loaded as a run loads it
+// (loadSettledBed(), setRunTimeStep()) and left alone for `rest_s` of simulated time with the
+// study's laws (no settling aid). `tick` (may be empty) gets the fraction done, 20 times.
+struct RestFigures {
+  double rms_speed_m_s = 0;                // over all particles, at the end
+  double largest_displacement_m = 0;       // of a particle centre, start to end
+  double largest_late_displacement_m = 0;  // over the second half of the rest alone
+  std::size_t moved_over_1mm = 0;          // particles displaced more than 1 mm, start to end
+  double kinetic_energy_J = 0;             // at the end
+  long steps = 0;
+  std::vector<adapter::SoilParticle> end;  // the bed at the end (in the loaded order)
+};
+RestFigures measureRest(const study::Study& study, const adapter::SettledSoil& settled, double rest_s, int threads,
+                        const std::function<void(double)>& tick);
+
 }  // namespace demfem::builtin
