@@ -7,13 +7,16 @@
 // numbers.
 // --rest-s T: each built-in bed is then left alone for T s of simulated time with the study's laws
 // at the run's step (no settling aid), and its rms particle speed at the end and largest particle
-// displacement are reported (a bed at rest: below 0.3 mm/s and 1 mm after 2 s).
+// displacement are reported (a bed at rest: below 0.3 mm/s and 1 mm after 2 s); --rest-vtk DIR
+// also writes that rest as a run writes its particle files, the rest run of `demfem soil-motion
+// --rest-run`.
 //
 // Soils are kept by hash in --soil-dir (a scratch directory: default a new one under the system's
 // temporary directory) and reused unless --force: LIGGGHTS' soils do not change when the built-in
 // deposition does. Both engines deposit in this process (LIGGGHTS on one MPI rank, the built-in DEM
 // on --threads threads); depositions are long phases and show their progress on stderr.
 #include "bench_statistics.hpp"
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/liggghts/backend.hpp"
@@ -27,6 +30,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -48,11 +52,30 @@ struct Bed {
 };
 
 // Leaves the bed alone for `rest_s` (builtin::measureRest: loaded as a run loads it, the study's
-// laws at the run's step) and keeps its figures.
-void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double rest_s, int threads, Bed& bed) {
-  const auto rest = builtin::measureRest(s, soil, rest_s, threads, [rest_s](double fraction) {
-    std::cerr << "  rest: " << fraction * rest_s << " s of " << rest_s << " s\r" << std::flush;
-  });
+// laws at the run's step) and keeps its figures. With `vtk_dir` the particles are written there as a
+// run writes them (vtk/particles.pvd, a file every output.vtk_every FEM steps, named by the FEM
+// step): the rest run `demfem soil-motion --rest-run` takes velocities against.
+void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double rest_s, int threads, const std::filesystem::path& vtk_dir,
+                 Bed& bed) {
+  const double every_s = s.output.vtk_every > 0 ? s.output.vtk_every * s.fem.dt_s : 0.0;
+  std::optional<adapter::VtkSeries> series;
+  if (!vtk_dir.empty()) {
+    if (!(every_s > 0)) throw std::invalid_argument("--rest-vtk: the study writes no particle files (output.vtk_every)");
+    std::filesystem::create_directories(vtk_dir / "vtk");
+    series.emplace(vtk_dir / "vtk" / "particles.pvd");
+  }
+  const auto rest = builtin::measureRest(
+      s, soil, rest_s, threads,
+      [&](const builtin::DemSimulation& sim) {
+        if (series) {
+          char name[40];
+          std::snprintf(name, sizeof name, "particles_%06lld.vtp", static_cast<long long>(std::llround(sim.time() / s.fem.dt_s)));
+          sim.writeParticlesVtk(vtk_dir / "vtk" / name);
+          series->add(sim.time(), name);
+        }
+        std::cerr << "  rest: " << sim.time() << " s of " << rest_s << " s\r" << std::flush;
+      },
+      every_s);
   std::cerr << '\n';
   bed.rest_rms_speed_mm_s = 1e3 * rest.rms_speed_m_s;
   bed.rest_max_displacement_mm = 1e3 * rest.largest_displacement_m;
@@ -74,7 +97,7 @@ Stats stats(const std::vector<double>& v) {
 }
 
 Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t seed, int threads,
-                   const std::filesystem::path& dir, bool force, double rest_s) {
+                   const std::filesystem::path& dir, bool force, double rest_s, const std::string& rest_vtk) {
   s.soil.deposition_backend = backend;
   s.soil.deposition_seed = seed;
   const auto file = adapter::settledSoilFile(s, dir);
@@ -113,7 +136,9 @@ Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t see
   bed.surface_mm = soil.settling.surface_height_m * 1e3;
   bed.simulated_s = soil.settling.simulated_s;
   bed.settled = adapter::unsettledReason(soil.settling).empty();
-  if (rest_s > 0 && backend == "builtin") measureRest(s, soil, rest_s, threads, bed);
+  if (rest_s > 0 && backend == "builtin")
+    measureRest(s, soil, rest_s, threads, rest_vtk.empty() ? std::filesystem::path() : std::filesystem::path(rest_vtk) / ("seed-" + std::to_string(seed)),
+                bed);
   return bed;
 }
 
@@ -127,6 +152,7 @@ int main(int argc, char** argv) {
   std::string soil_dir;
   bool force = false;
   double rest_s = 0;
+  std::string rest_vtk;
   std::vector<std::string> backends{"builtin", "liggghts"};
   app.add_option("--study", file, "Study file (default: studies/quick_liggghts.json)")->check(CLI::ExistingFile);
   app.add_option("--seeds", seeds, "Deposition seeds 1..N")->check(CLI::PositiveNumber);
@@ -135,6 +161,8 @@ int main(int argc, char** argv) {
   app.add_option("--backends", backends, "Engines that deposit")->check(CLI::IsMember({"builtin", "liggghts"}));
   app.add_option("--rest-s", rest_s, "Leave each built-in bed alone this long (s) and report its rest state")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--rest-vtk", rest_vtk,
+                 "With --rest-s: write each built-in bed's rest as a run writes its particles, to DIR/seed-N (for demfem soil-motion --rest-run)");
   app.add_flag("--force", force, "Deposit again even where the soil file exists");
   std::string& json_target = cli::addJsonOption(app);
   CLI11_PARSE(app, argc, argv);
@@ -145,7 +173,7 @@ int main(int argc, char** argv) {
                          : std::filesystem::path(soil_dir);
     std::vector<Bed> beds;
     for (int seed = 1; seed <= seeds; ++seed)
-      for (const auto& backend : backends) beds.push_back(depositOrReuse(base, backend, static_cast<std::uint64_t>(seed), threads, dir, force, rest_s));
+      for (const auto& backend : backends) beds.push_back(depositOrReuse(base, backend, static_cast<std::uint64_t>(seed), threads, dir, force, rest_s, rest_vtk));
 
     const bool text = cli::textOnStdout(json_target);
     if (text) {

@@ -457,19 +457,23 @@ void setRunTimeStep(DemSimulation& sim, const study::Study& study) {
 }
 
 RestFigures measureRest(const study::Study& study, const adapter::SettledSoil& settled, double rest_s, int threads,
-                        const std::function<void(double)>& tick) {
+                        const RestObserver& observe, double observe_every_s) {
   DemSimulation sim(study.soil, binDomain(study.soil), threads);
   loadSettledBed(sim, study.soil, settled);
   setRunTimeStep(sim, study);
   std::vector<Vec3> start(sim.particleCount()), half;
   for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
   const long steps = std::lround(rest_s / sim.timeStep());
-  const long chunk = std::max(1L, steps / 20);
-  for (long done = 0; done < steps; done += chunk) {
+  const long every = std::max(1L, observe_every_s > 0 ? std::lround(observe_every_s / sim.timeStep()) : steps / 20);
+  if (observe) observe(sim);
+  for (long done = 0; done < steps;) {
     if (half.empty() && done >= steps / 2)
       for (std::size_t i = 0; i < start.size(); ++i) half.push_back(sim.particle(i).x);
-    sim.run(std::min(chunk, steps - done));
-    if (tick) tick(sim.time() / rest_s);
+    long next = std::min(steps, (done / every + 1) * every);  // the next observation or the end
+    if (half.empty()) next = std::min(next, steps / 2);        // or the half
+    sim.run(next - done);
+    done = next;
+    if (observe && done % every == 0) observe(sim);
   }
   const auto distance = [](const Vec3& a, const Vec3& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); };
   RestFigures out;

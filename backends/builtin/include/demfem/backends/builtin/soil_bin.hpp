@@ -86,7 +86,8 @@ void setRunTimeStep(DemSimulation& sim, const study::Study& study);
 
 // A bed at rest (docs/builtin-dem.md, "A bed at rest"): `settled` loaded as a run loads it
 // (loadSettledBed(), setRunTimeStep()) and left alone for `rest_s` of simulated time with the
-// study's laws (no settling aid). `tick` (may be empty) gets the fraction done, 20 times.
+// study's laws (no settling aid). `observe` (may be empty) sees the simulation at t = 0 and after
+// every `observe_every_s` (rounded to whole steps; 0: every twentieth of the rest).
 struct RestFigures {
   double rms_speed_m_s = 0;                // over all particles, at the end
   double largest_displacement_m = 0;       // of a particle centre, start to end
@@ -96,7 +97,8 @@ struct RestFigures {
   long steps = 0;
   std::vector<adapter::SoilParticle> end;  // the bed at the end (in the loaded order)
 };
+using RestObserver = std::function<void(const DemSimulation&)>;
 RestFigures measureRest(const study::Study& study, const adapter::SettledSoil& settled, double rest_s, int threads,
-                        const std::function<void(double)>& tick);
+                        const RestObserver& observe, double observe_every_s = 0);
 
 }  // namespace demfem::builtin
