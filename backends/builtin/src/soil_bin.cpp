@@ -177,7 +177,8 @@ struct ReloadFigures {
   long steps = 0;
 };
 
-ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vector<adapter::SoilParticle>& particles) {
+ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vector<adapter::SoilParticle>& particles,
+                                const std::function<void(const std::string&)>& line) {
   ReloadFigures out;
   adapter::SettledSoil bed;
   bed.particles = std::move(particles);
@@ -188,6 +189,10 @@ ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vec
     out.simulated_s += kReloadWindow_s;
     bed.particles = out.last.end;
     out.at_rest = out.last.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m;
+    std::ostringstream text;
+    text << "reload " << out.windows << ": largest displacement " << out.last.largest_displacement_m * 1e3 << " mm in "
+         << kReloadWindow_s << " s, " << out.last.moved_over_1mm << " particles beyond 1 mm";
+    line(text.str());
   }
   particles = std::move(bed.particles);
   return out;
@@ -345,7 +350,7 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
     const auto p = sim->particle(i);
     out.particles.push_back({p.x, p.radius, p.layer});
   }
-  const ReloadFigures reload = reloadUntilAtRest(study, threads, out.particles);
+  const ReloadFigures reload = reloadUntilAtRest(study, threads, out.particles, [&](const std::string& text) { line(1.0, text); });
   if (!reload.at_rest) ++out.settling.stages_capped;
   {
     std::ostringstream text;

@@ -71,7 +71,7 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     }
     CHECK(soil.backend == "builtin");
     CHECK(soil.seed == st.soil.deposition_seed);
-    CHECK(soil.settling.stages == 2);  // the pour and the final settling
+    CHECK(soil.settling.stages == 3);  // the pour, the final settling and the reload phase
     CHECK(soil.settling.bulk_density_kg_m3 == adapter::bulkDensity(soil.particles, st.soil));
     CHECK(soil.settling.coordination_number == adapter::meanCoordinationNumber(soil.particles));
     CHECK(soil.settling.threshold_J == st.soil.settle_kinetic_energy_J);
