@@ -46,7 +46,7 @@ constexpr double kDepositionStepFraction = 0.1;  // of the stiffest spring's cri
 // kReloadRestFraction of the smallest diameter, at most kMaxReloads windows.
 constexpr double kReloadWindow_s = 0.5;
 constexpr double kReloadRestFraction = 0.05;
-constexpr int kMaxReloads = 6;
+constexpr int kMaxReloads = 10;
 // The density protocol: the bed's bulk density within kDensityTolerance of the target, found over
 // at most kMaxDensityPours pours with a friction factor in [0, 1].
 constexpr double kDensityTolerance = 0.01;
@@ -164,7 +164,9 @@ std::vector<ParticleState> randomInsertion(std::mt19937_64& rng, std::size_t cou
 
 // The reload phase: `particles` left alone as a run loads them (measureRest()) for
 // kReloadWindow_s, then again from where they ended, until a window moves no particle centre by
-// more than kReloadRestFraction of the smallest diameter (at most kMaxReloads windows). Loading
+// more than kReloadRestFraction of the smallest diameter and none across a layer boundary (at most
+// kMaxReloads windows). After every window each particle is tagged with the layer covering the
+// depth of its centre (and gets its material when loaded again), as after the trims. Loading
 // drops the contact history the final settling built (the tangential and rolling springs, the
 // hysteretic springs' plastic overlaps), so the first windows let the bed find the rest a run will
 // start from: perched grains held by spring history roll off. Replaces `particles` by the bed at
@@ -188,10 +190,15 @@ ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vec
     out.steps += out.last.steps;
     out.simulated_s += kReloadWindow_s;
     bed.particles = out.last.end;
-    out.at_rest = out.last.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m;
+    std::size_t retagged = 0;  // particles whose centre has crossed a layer boundary: tagged anew
+    for (auto& p : bed.particles) {
+      const int layer = layerAt(study.soil, p.x_m[1]);
+      if (layer != p.layer) p.layer = layer, ++retagged;
+    }
+    out.at_rest = out.last.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m && retagged == 0;
     std::ostringstream text;
     text << "reload " << out.windows << ": largest displacement " << out.last.largest_displacement_m * 1e3 << " mm in "
-         << kReloadWindow_s << " s, " << out.last.moved_over_1mm << " particles beyond 1 mm";
+         << kReloadWindow_s << " s, " << out.last.moved_over_1mm << " particles beyond 1 mm, " << retagged << " tagged with another layer";
     line(text.str());
   }
   particles = std::move(bed.particles);

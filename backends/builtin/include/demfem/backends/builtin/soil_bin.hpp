@@ -19,9 +19,10 @@
 //   layer's material) covering that depth, and settle once more. Then the reload phase: the bed
 //   loaded as a run loads it (loadSettledBed(), setRunTimeStep(): contact history dropped, the run's
 //   step) and left alone for 0.5 s, again and again from where it ended, until a window moves no
-//   particle centre by more than 0.05 of the smallest diameter (at most 6 windows; the bed is the
-//   end of the last). The result carries its settling figures: stages = 3 (the pour, the final
-//   settling and the reload phase), those that hit their cap (the reload phase: not at rest after 6
+//   particle centre by more than 0.05 of the smallest diameter and none across a layer boundary
+//   (after each window every particle is tagged anew by the depth of its centre; at most 10
+//   windows; the bed is the end of the last). The result carries its settling figures: stages = 3 (the pour, the final
+//   settling and the reload phase), those that hit their cap (the reload phase: not at rest after 10
 //   windows), the total kinetic energy at the end, surface height, packing fraction, bulk density
 //   and coordination number.
 // - With soil.bulk_density_kg_m3 (kg/m^3) the density protocol: the plain pour, then pours with the
