@@ -164,9 +164,8 @@ std::vector<ParticleState> randomInsertion(std::mt19937_64& rng, std::size_t cou
 
 // The reload phase: `particles` left alone as a run loads them (measureRest()) for
 // kReloadWindow_s, then again from where they ended, until a window moves no particle centre by
-// more than kReloadRestFraction of the smallest diameter and none across a layer boundary (at most
-// kMaxReloads windows). After every window each particle is tagged with the layer covering the
-// depth of its centre (and gets its material when loaded again), as after the trims. Loading
+// more than kReloadRestFraction of the smallest diameter (at most kMaxReloads windows). A particle
+// keeps its layer: a grain that settles a little does not change its material. Loading
 // drops the contact history the final settling built (the tangential and rolling springs, the
 // hysteretic springs' plastic overlaps), so the first windows let the bed find the rest a run will
 // start from: perched grains held by spring history roll off. Replaces `particles` by the bed at
@@ -177,6 +176,7 @@ struct ReloadFigures {
   RestFigures last;  // the last window
   double simulated_s = 0;
   long steps = 0;
+  double time_step_s = 0;  // the run's
 };
 
 ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vector<adapter::SoilParticle>& particles,
@@ -188,17 +188,13 @@ ReloadFigures reloadUntilAtRest(const study::Study& study, int threads, std::vec
     out.last = measureRest(study, bed, kReloadWindow_s, threads, {});
     ++out.windows;
     out.steps += out.last.steps;
+    out.time_step_s = out.last.time_step_s;
     out.simulated_s += kReloadWindow_s;
     bed.particles = out.last.end;
-    std::size_t retagged = 0;  // particles whose centre has crossed a layer boundary: tagged anew
-    for (auto& p : bed.particles) {
-      const int layer = layerAt(study.soil, p.x_m[1]);
-      if (layer != p.layer) p.layer = layer, ++retagged;
-    }
-    out.at_rest = out.last.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m && retagged == 0;
+    out.at_rest = out.last.largest_displacement_m <= kReloadRestFraction * study.soil.diameter_min_m;
     std::ostringstream text;
     text << "reload " << out.windows << ": largest displacement " << out.last.largest_displacement_m * 1e3 << " mm in "
-         << kReloadWindow_s << " s, " << out.last.moved_over_1mm << " particles beyond 1 mm, " << retagged << " tagged with another layer";
+         << kReloadWindow_s << " s, " << out.last.moved_over_1mm << " particles beyond 1 mm";
     line(text.str());
   }
   particles = std::move(bed.particles);
@@ -372,8 +368,10 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
   out.settling.packing_fraction = adapter::packingFraction(out.particles, soil);
   out.settling.bulk_density_kg_m3 = adapter::bulkDensity(out.particles, soil);
   out.settling.coordination_number = adapter::meanCoordinationNumber(out.particles);
-  report.steps += (friction_scale != 1.0 ? pour_steps : 0) + sim->stepCount() + reload.steps;
+  report.steps += (friction_scale != 1.0 ? pour_steps : 0) + sim->stepCount();
   report.time_step_s = sim->timeStep();
+  report.reload_steps += reload.steps;
+  report.reload_time_step_s = reload.time_step_s;
   return out;
 }
 
@@ -490,6 +488,7 @@ RestFigures measureRest(const study::Study& study, const adapter::SettledSoil& s
   const auto distance = [](const Vec3& a, const Vec3& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); };
   RestFigures out;
   out.steps = steps;
+  out.time_step_s = sim.timeStep();
   double v2 = 0;
   for (std::size_t i = 0; i < start.size(); ++i) {
     const auto p = sim.particle(i);

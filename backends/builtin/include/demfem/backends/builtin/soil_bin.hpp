@@ -19,9 +19,8 @@
 //   layer's material) covering that depth, and settle once more. Then the reload phase: the bed
 //   loaded as a run loads it (loadSettledBed(), setRunTimeStep(): contact history dropped, the run's
 //   step) and left alone for 0.5 s, again and again from where it ended, until a window moves no
-//   particle centre by more than 0.05 of the smallest diameter and none across a layer boundary
-//   (after each window every particle is tagged anew by the depth of its centre; at most 10
-//   windows; the bed is the end of the last). The result carries its settling figures: stages = 3 (the pour, the final
+//   particle centre by more than 0.05 of the smallest diameter (at most 10 windows; the bed is the
+//   end of the last; particles keep the layer the final settling tagged them with). The result carries its settling figures: stages = 3 (the pour, the final
 //   settling and the reload phase), those that hit their cap (the reload phase: not at rest after 10
 //   windows), the total kinetic energy at the end, surface height, packing fraction, bulk density
 //   and coordination number.
@@ -46,8 +45,10 @@ namespace demfem::builtin {
 
 // What a deposition cost, besides the settling figures the soil itself carries.
 struct DepositReport {
-  long steps = 0;
+  long steps = 0;  // of the pours and settlings, at time_step_s
   double time_step_s = 0;
+  long reload_steps = 0;  // of the reload phases, at the run's step reload_time_step_s
+  double reload_time_step_s = 0;
 };
 
 // The DEM domain of a study's bin (room above the fill for deposition and tools).
@@ -96,6 +97,7 @@ struct RestFigures {
   std::size_t moved_over_1mm = 0;          // particles displaced more than 1 mm, start to end
   double kinetic_energy_J = 0;             // at the end
   long steps = 0;
+  double time_step_s = 0;                  // the run's
   std::vector<adapter::SoilParticle> end;  // the bed at the end (in the loaded order)
 };
 using RestObserver = std::function<void(const DemSimulation&)>;
