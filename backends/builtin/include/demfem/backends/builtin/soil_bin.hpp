@@ -19,11 +19,12 @@
 //   layer's material) covering that depth, and settle once more. Then the reload phase: the bed
 //   loaded as a run loads it (loadSettledBed(), setRunTimeStep(): contact history dropped, the run's
 //   step) and left alone for 0.5 s, again and again from where it ended, until a window moves no
-//   particle centre by more than 0.05 of the smallest diameter (at most 10 windows; the bed is the
-//   end of the last; particles keep the layer the final settling tagged them with). The result carries its settling figures: stages = 3 (the pour, the final
+//   particle centre by more than 0.05 of the smallest diameter and lifts none above the fill height
+//   (centres risen above it are trimmed after each window; at most 10 windows; the bed is the end
+//   of the last; particles keep the layer the final settling tagged them with). The result carries its settling figures: stages = 3 (the pour, the final
 //   settling and the reload phase), those that hit their cap (the reload phase: not at rest after 10
-//   windows), the total kinetic energy at the end, surface height, packing fraction, bulk density
-//   and coordination number.
+//   windows), the total kinetic energy at the end of the final settling (the reload phase is judged
+//   by displacement), surface height, packing fraction, bulk density and coordination number.
 // - With soil.bulk_density_kg_m3 (kg/m^3) the density protocol: the plain pour, then pours with the
 //   inter-particle static and rolling friction times f in [0, 1) (walls keep theirs), f found by
 //   regula falsi until the bed's bulk density is within 1 % of the target (at most 8 pours), the
@@ -95,7 +96,6 @@ struct RestFigures {
   double largest_displacement_m = 0;       // of a particle centre, start to end
   double largest_late_displacement_m = 0;  // over the second half of the rest alone
   std::size_t moved_over_1mm = 0;          // particles displaced more than 1 mm, start to end
-  double kinetic_energy_J = 0;             // at the end
   long steps = 0;
   double time_step_s = 0;                  // the run's
   std::vector<adapter::SoilParticle> end;  // the bed at the end (in the loaded order)
