@@ -435,4 +435,26 @@ double toolDisplacement(const RunFrames& run, std::size_t frame) {
   return meanZ(run.tool_frames.at(frame)) - meanZ(run.tool_frames.front());
 }
 
+ParticleFrame againstRest(const ParticleFrame& frame, const ParticleFrame& rest, const fs::path& rest_file) {
+  if (rest.size() != frame.size())
+    throw InputError(rest_file.string() + ": the rest run has " + std::to_string(rest.size()) + " particles, the run " +
+                     std::to_string(frame.size()) + ": not the same bed");
+  ParticleFrame out = frame;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (rest.radius_m[i] != frame.radius_m[i])
+      throw InputError(rest_file.string() + ": particle " + std::to_string(i) + " has radius " + std::to_string(rest.radius_m[i] * 1e3) +
+                       " mm in the rest run, " + std::to_string(frame.radius_m[i] * 1e3) + " mm in the run: not the same bed");
+    for (int c = 0; c < 3; ++c) out.velocity_m_s[3 * i + c] -= rest.velocity_m_s[3 * i + c];
+  }
+  return out;
+}
+
+fs::path restFrameAt(const fs::path& rest_dir, double time_s) {
+  const fs::path pvd = rest_dir / "vtk" / "particles.pvd";
+  for (const auto& entry : collection(pvd))
+    if (std::fabs(entry.time_s - time_s) <= 1e-6) return entry.file;
+  throw InputError(pvd.string() + ": no particle file at t = " + std::to_string(time_s) +
+                   " s: the rest run must have a frame at every analysed time of the run");
+}
+
 }  // namespace demfem::analysis

@@ -186,7 +186,12 @@ SoilMotionRun analyseRun(const std::filesystem::path& run_dir, const SoilMotionS
   r.mixing_map_after = mixingSection(last, s.mixing_cell_m);
   for (const double d : s.displacements_m) {
     const std::size_t k = frameAt(run, d);
-    r.instants.push_back(instantOf(run, k, readParticleFrame(run.particle_files[k]), r, s));
+    ParticleFrame frame = readParticleFrame(run.particle_files[k]);
+    if (!s.rest_run.empty()) {
+      const auto rest_file = restFrameAt(s.rest_run, run.time_s[k]);
+      frame = againstRest(frame, readParticleFrame(rest_file), rest_file);
+    }
+    r.instants.push_back(instantOf(run, k, frame, r, s));
   }
   return r;
 }
@@ -195,7 +200,8 @@ json soilMotionJson(const std::vector<SoilMotionRun>& runs, const SoilMotionSett
   json out{{"threshold_mm_s", s.threshold_m_s * 1e3}, {"cell_mm", s.cell_m * 1e3}, {"mixing_cell_mm", s.mixing_cell_m * 1e3},
            {"flow_cell_mm", s.flow_cell_m * 1e3}, {"streamline_step_mm", s.streamlines.step_fraction * s.flow_cell_m * 1e3},
            {"streamline_max_step_turn_deg", degrees(s.streamlines.max_step_turn_rad)},
-           {"streamline_max_total_turn_deg", degrees(s.streamlines.max_total_turn_rad)}, {"runs", json::array()}};
+           {"streamline_max_total_turn_deg", degrees(s.streamlines.max_total_turn_rad)},
+           {"rest_run", s.rest_run.empty() ? json(nullptr) : json(s.rest_run.string())}, {"runs", json::array()}};
   for (const auto& r : runs) {
     json run{{"run", r.name}, {"tool", r.tool}, {"surface_mm", r.surface_y_m * 1e3}, {"mixing_before", r.mixing_before},
              {"mixing_after", r.mixing_after}, {"instants", json::array()}};
@@ -230,6 +236,9 @@ std::string soilMotionMarkdown(const std::vector<SoilMotionRun>& runs, const Soi
      << " mm/s connected to the tool (linked across gaps up to " << mm(s.connect_gap_m) << " mm), its depth below the surface, length and width (Section 3.5); speeds directly in front of the tool (within "
      << mm(s.front_reach_m) << " mm of its front face, across its width, from its tip to the surface); layer mixing = label entropy per "
      << mm(s.mixing_cell_m) << " mm cell over the entropy of all labels (0 untouched, 1 fully mixed).\n\n"
+     << (s.rest_run.empty() ? std::string("Velocities as the run has them (no rest run: the bed's own creep counts as motion).\n\n")
+                            : "Velocities against the rest run " + s.rest_run.string() +
+                                  " (the same bed left alone): the bed's own creep is not counted as motion.\n\n")
      << "| run | displacement (mm) | moving depth (mm) | length (mm) | width (mm) | speed in front (mm/s) | mixing |\n"
         "|---|---|---|---|---|---|---|\n";
   for (const auto& r : runs) {

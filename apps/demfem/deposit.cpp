@@ -111,11 +111,14 @@ void addDepositCommand(CLI::App& app) {
     if (text) {
       printSoil(file, soil);
       if (cost.steps > 0) std::cout << "  " << cost.steps << " steps of " << cost.time_step_s << " s";
+      if (cost.reload_steps > 0) std::cout << " and " << cost.reload_steps << " reload steps of " << cost.reload_time_step_s << " s";
       std::cout << "  " << wall_s << " s wall\n";
     }
     nlohmann::json report = reportJson(opt->study_file, file, soil, false);
     report["steps"] = cost.steps;
     report["time_step_s"] = cost.time_step_s;
+    report["reload_steps"] = cost.reload_steps;
+    report["reload_time_step_s"] = cost.reload_time_step_s;
     report["wall_time_s"] = wall_s;
     writeJson(json_target, report);
   });

@@ -25,7 +25,7 @@ struct SoilMotionOptions {
   double threshold_mm_s = kDefaults.threshold_m_s * 1e3, cell_mm = kDefaults.cell_m * 1e3,
          front_reach_mm = kDefaults.front_reach_m * 1e3, mixing_cell_mm = kDefaults.mixing_cell_m * 1e3,
          flow_cell_mm = kDefaults.flow_cell_m * 1e3;
-  std::string tool, out_dir = "out/soil-motion", gnuplot = "gnuplot";
+  std::string tool, rest_run, out_dir = "out/soil-motion", gnuplot = "gnuplot";
   bool no_plots = false;
 };
 
@@ -41,6 +41,7 @@ analysis::SoilMotionSettings settingsOf(const SoilMotionOptions& o) {
   s.mixing_cell_m = o.mixing_cell_mm * 1e-3;
   s.flow_cell_m = o.flow_cell_mm * 1e-3;
   s.tool = o.tool;
+  s.rest_run = o.rest_run;
   return s;
 }
 
@@ -88,6 +89,10 @@ void addSoilMotionCommand(CLI::App& app) {
   cmd->add_option("--flow-cell-mm", o->flow_cell_mm, "Cell size of the streamline-order flow section on the vertical section (mm)")
       ->capture_default_str();
   cmd->add_option("--tool", o->tool, "Tool whose motion is analysed (default: the run's only tool)");
+  cmd->add_option("--rest-run", o->rest_run,
+                  "A run of the same bed left alone (vtk/particles.pvd at the runs' times, e.g. demfem-bench-soil-bed --rest-vtk): "
+                  "velocities are taken against it, so the bed's own creep is not motion")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--out", o->out_dir, "Output directory")->capture_default_str();
   addPlotOptions(*cmd, o->no_plots, o->gnuplot, "SVG and PNG plots");
   std::string& json_target = addJsonOption(*cmd);

@@ -7,17 +7,19 @@
 // numbers.
 // --rest-s T: each built-in bed is then left alone for T s of simulated time with the study's laws
 // at the run's step (no settling aid), and its rms particle speed at the end and largest particle
-// displacement are reported (a bed at rest: below 0.3 mm/s and 1 mm after 2 s).
+// displacement are reported (a bed at rest: below 0.3 mm/s and 1 mm after 2 s); --rest-vtk DIR
+// also writes that rest as a run writes its particle files, the rest run of `demfem soil-motion
+// --rest-run`.
 //
 // Soils are kept by hash in --soil-dir (a scratch directory: default a new one under the system's
 // temporary directory) and reused unless --force: LIGGGHTS' soils do not change when the built-in
 // deposition does. Both engines deposit in this process (LIGGGHTS on one MPI rank, the built-in DEM
 // on --threads threads); depositions are long phases and show their progress on stderr.
 #include "bench_statistics.hpp"
+#include "demfem/adapter/output_files.hpp"
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
 #include "demfem/backends/liggghts/backend.hpp"
-#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/cli/cli_support.hpp"
 #include "demfem/study/study.hpp"
 
@@ -28,6 +30,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -48,38 +51,36 @@ struct Bed {
   std::size_t rest_moved_1mm = 0;                        // particles displaced more than 1 mm
 };
 
-// Leaves the bed alone for `rest_s` of simulated time (the study's laws, the run's step) and
-// measures its rms speed at the end and the largest displacement of a particle centre.
-void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double rest_s, int threads, Bed& bed) {
-  builtin::DemSimulation sim(s.soil, builtin::binDomain(s.soil), threads);
-  builtin::addBinWalls(sim, s.soil);
-  builtin::addSettledParticles(sim, s.soil, soil);
-  sim.setTimeStep(study::demStepDividing(physics::demTimeStep(s).step_s, s.fem.dt_s));
-  sim.setRollingRegularisationStep(physics::rollingRegularisationStep(s));
-  std::vector<builtin::Vec3> start(sim.particleCount());
-  for (std::size_t i = 0; i < start.size(); ++i) start[i] = sim.particle(i).x;
-  const long steps = std::lround(rest_s / sim.timeStep());
-  const long chunk = std::max(1L, steps / 20);
-  std::vector<builtin::Vec3> half;
-  for (long done = 0; done < steps; done += chunk) {
-    if (half.empty() && done >= steps / 2)
-      for (std::size_t i = 0; i < start.size(); ++i) half.push_back(sim.particle(i).x);
-    sim.run(std::min(chunk, steps - done));
-    std::cerr << "  rest: " << sim.time() << " s of " << rest_s << " s\r" << std::flush;
+// Leaves the bed alone for `rest_s` (builtin::measureRest: loaded as a run loads it, the study's
+// laws at the run's step) and keeps its figures. With `vtk_dir` the particles are written there as a
+// run writes them (vtk/particles.pvd, a file every output.vtk_every FEM steps, named by the FEM
+// step): the rest run `demfem soil-motion --rest-run` takes velocities against.
+void measureRest(const study::Study& s, const adapter::SettledSoil& soil, double rest_s, int threads, const std::filesystem::path& vtk_dir,
+                 Bed& bed) {
+  const double every_s = s.output.vtk_every > 0 ? s.output.vtk_every * s.fem.dt_s : 0.0;
+  std::optional<adapter::VtkSeries> series;
+  if (!vtk_dir.empty()) {
+    if (!(every_s > 0)) throw std::invalid_argument("--rest-vtk: the study writes no particle files (output.vtk_every)");
+    std::filesystem::create_directories(vtk_dir / "vtk");
+    series.emplace(vtk_dir / "vtk" / "particles.pvd");
   }
-  double v2 = 0, max_d = 0, late_d = 0;
-  for (std::size_t i = 0; i < start.size(); ++i) {
-    const auto p = sim.particle(i);
-    v2 += p.v[0] * p.v[0] + p.v[1] * p.v[1] + p.v[2] * p.v[2];
-    const double d = std::hypot(p.x[0] - start[i][0], p.x[1] - start[i][1], p.x[2] - start[i][2]);
-    max_d = std::max(max_d, d);
-    if (d > 1e-3) ++bed.rest_moved_1mm;
-    if (!half.empty()) late_d = std::max(late_d, std::hypot(p.x[0] - half[i][0], p.x[1] - half[i][1], p.x[2] - half[i][2]));
-  }
-  bed.rest_late_max_displacement_mm = 1e3 * late_d;
-  bed.rest_rms_speed_mm_s = 1e3 * std::sqrt(v2 / static_cast<double>(start.size()));
-  bed.rest_max_displacement_mm = 1e3 * max_d;
+  const auto rest = builtin::measureRest(
+      s, soil, rest_s, threads,
+      [&](const builtin::DemSimulation& sim) {
+        if (series) {
+          char name[40];
+          std::snprintf(name, sizeof name, "particles_%06lld.vtp", static_cast<long long>(std::llround(sim.time() / s.fem.dt_s)));
+          sim.writeParticlesVtk(vtk_dir / "vtk" / name);
+          series->add(sim.time(), name);
+        }
+        std::cerr << "  rest: " << sim.time() << " s of " << rest_s << " s\r" << std::flush;
+      },
+      every_s);
   std::cerr << '\n';
+  bed.rest_rms_speed_mm_s = 1e3 * rest.rms_speed_m_s;
+  bed.rest_max_displacement_mm = 1e3 * rest.largest_displacement_m;
+  bed.rest_late_max_displacement_mm = 1e3 * rest.largest_late_displacement_m;
+  bed.rest_moved_1mm = rest.moved_over_1mm;
 }
 
 struct Stats {
@@ -96,7 +97,7 @@ Stats stats(const std::vector<double>& v) {
 }
 
 Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t seed, int threads,
-                   const std::filesystem::path& dir, bool force, double rest_s) {
+                   const std::filesystem::path& dir, bool force, double rest_s, const std::string& rest_vtk) {
   s.soil.deposition_backend = backend;
   s.soil.deposition_seed = seed;
   const auto file = adapter::settledSoilFile(s, dir);
@@ -135,7 +136,9 @@ Bed depositOrReuse(study::Study s, const std::string& backend, std::uint64_t see
   bed.surface_mm = soil.settling.surface_height_m * 1e3;
   bed.simulated_s = soil.settling.simulated_s;
   bed.settled = adapter::unsettledReason(soil.settling).empty();
-  if (rest_s > 0 && backend == "builtin") measureRest(s, soil, rest_s, threads, bed);
+  if (rest_s > 0 && backend == "builtin")
+    measureRest(s, soil, rest_s, threads, rest_vtk.empty() ? std::filesystem::path() : std::filesystem::path(rest_vtk) / ("seed-" + std::to_string(seed)),
+                bed);
   return bed;
 }
 
@@ -149,6 +152,7 @@ int main(int argc, char** argv) {
   std::string soil_dir;
   bool force = false;
   double rest_s = 0;
+  std::string rest_vtk;
   std::vector<std::string> backends{"builtin", "liggghts"};
   app.add_option("--study", file, "Study file (default: studies/quick_liggghts.json)")->check(CLI::ExistingFile);
   app.add_option("--seeds", seeds, "Deposition seeds 1..N")->check(CLI::PositiveNumber);
@@ -157,6 +161,8 @@ int main(int argc, char** argv) {
   app.add_option("--backends", backends, "Engines that deposit")->check(CLI::IsMember({"builtin", "liggghts"}));
   app.add_option("--rest-s", rest_s, "Leave each built-in bed alone this long (s) and report its rest state")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--rest-vtk", rest_vtk,
+                 "With --rest-s: write each built-in bed's rest as a run writes its particles, to DIR/seed-N (for demfem soil-motion --rest-run)");
   app.add_flag("--force", force, "Deposit again even where the soil file exists");
   std::string& json_target = cli::addJsonOption(app);
   CLI11_PARSE(app, argc, argv);
@@ -167,7 +173,7 @@ int main(int argc, char** argv) {
                          : std::filesystem::path(soil_dir);
     std::vector<Bed> beds;
     for (int seed = 1; seed <= seeds; ++seed)
-      for (const auto& backend : backends) beds.push_back(depositOrReuse(base, backend, static_cast<std::uint64_t>(seed), threads, dir, force, rest_s));
+      for (const auto& backend : backends) beds.push_back(depositOrReuse(base, backend, static_cast<std::uint64_t>(seed), threads, dir, force, rest_s, rest_vtk));
 
     const bool text = cli::textOnStdout(json_target);
     if (text) {

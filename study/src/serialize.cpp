@@ -181,7 +181,7 @@ std::string soilHash(const Study& study) {
   canonical["dem"] = dem;
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx",
-                static_cast<unsigned long long>(fnv1a64("demfem-soil-v4\n" + canonical.dump())));
+                static_cast<unsigned long long>(fnv1a64("demfem-soil-v5\n" + canonical.dump())));
   return hex;
 }
 

@@ -2,6 +2,7 @@
 #include "demfem/analysis/recording.hpp"
 #include "demfem/analysis/soil_motion.hpp"
 #include "demfem/analysis/soil_motion_report.hpp"
+#include "demfem/vtkio/vtk_files.hpp"
 #include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
@@ -287,4 +288,65 @@ TEST_CASE("a run marked incomplete by its sensors.json is refused naming the fil
   CHECK_THROWS_WITH(loadRun(dir.path()), Catch::Contains("sensors.json: /complete: the run is marked incomplete") && Catch::Contains("DEM blew up"));
   std::ofstream(dir / "sensors.json") << R"({"complete": true})";
   CHECK_THROWS_WITH(loadRun(dir.path()), Catch::Contains("particles.pvd"));  // complete: on to the particle files, absent here
+}
+
+TEST_CASE("against the bed's rest state a creeping floor layer is not motion and the region stops above it", "[analysis]") {
+  // The moving box of the cases above (centres x 65..125, y 25..75, z 105..245 mm) at 30 mm/s, on a
+  // floor layer (the two lowest rows, centres y 5 and 15 mm) that creeps at 6 mm/s along z, faster
+  // than the 5 mm/s threshold, in the run and in the rest run alike: the bed's own creep.
+  ParticleFrame run = lattice(20, 8, 40, 1);
+  ParticleFrame rest = run;
+  for (std::size_t i = 0; i < run.size(); ++i) {
+    const double* p = &run.position_m[3 * i];
+    const bool box = p[0] > 0.059 && p[0] < 0.131 && p[1] > 0.024 && p[1] < 0.076 && p[2] > 0.104 && p[2] < 0.246;
+    const bool floor = p[1] < 0.02;
+    run.velocity_m_s[3 * i + 2] = box ? 0.030 : floor ? 0.006 : 0.0;
+    rest.velocity_m_s[3 * i + 2] = floor ? 0.006 : 0.0;
+    rest.velocity_m_s[3 * i] = floor ? 1e-4 : 0.0;  // and the rest run's own x-creep, which the run lacks: 0.1 mm/s
+  }
+  Box seed{{0.08, 0.05, 0.245}, {0.11, 0.12, 0.255}};
+  for (int c = 0; c < 3; ++c) seed.lo[c] -= 0.0105, seed.hi[c] += 0.0105;
+  // As the velocities are, the box and the floor below it are one region: 80 mm deep, down to the floor.
+  const auto raw = connectedMovingExtent(run, 0.005, 0.080, seed, 0.001);
+  CHECK(raw.depth_m == Approx(0.080).epsilon(1e-12));
+  CHECK(raw.count == 7u * 6 * 15 + 2 * 20 * 40);
+  // Against the rest state: the box alone, 60 mm deep (its lowest point at y = 20 mm).
+  const ParticleFrame moved = againstRest(run, rest, "rest.vtp");
+  const auto region = connectedMovingExtent(moved, 0.005, 0.080, seed, 0.001);
+  CHECK(region.count == 7u * 6 * 15);
+  CHECK(region.depth_m == Approx(0.060).epsilon(1e-12));
+  CHECK(moved.speed(0) == Approx(1e-4).epsilon(1e-9));  // a floor particle: what differs from its rest (the x-creep)
+  // A floor that moves in the run beyond its rest (the tool really reaching it) is still motion.
+  for (std::size_t i = 0; i < run.size(); ++i)
+    if (run.position_m[3 * i + 1] < 0.02) run.velocity_m_s[3 * i + 2] = 0.012;
+  CHECK(connectedMovingExtent(againstRest(run, rest, "rest.vtp"), 0.005, 0.080, seed, 0.001).depth_m == Approx(0.080).epsilon(1e-12));
+}
+
+TEST_CASE("a rest run is found by time and refused when it is not the same bed", "[analysis]") {
+  const demfem::support::TempDir dir("soil-motion-rest");
+  std::filesystem::create_directories(dir / "vtk");
+  ParticleFrame f = lattice(2, 2, 2, 1);
+  demfem::vtkio::Dataset d;
+  d.time_s = 0.25;
+  d.points = f.position_m;
+  d.arrays = {{"radius_m", 1, f.radius_m, demfem::vtkio::ValueType::Float64},
+              {"velocity_m_s", 3, std::vector<double>(3 * f.size(), 0.002), demfem::vtkio::ValueType::Float64},
+              {"layer", 1, std::vector<double>(f.size(), 0.0), demfem::vtkio::ValueType::Int32}};
+  std::ofstream(dir / "vtk" / "particles_000010.vtp") << demfem::vtkio::encode(d, demfem::vtkio::Format::PolyData);
+  std::ofstream(dir / "vtk" / "particles.pvd")
+      << R"(<?xml version="1.0"?><VTKFile type="Collection" version="0.1"><Collection>)"
+      << R"(<DataSet timestep="0.25" part="0" file="particles_000010.vtp"/></Collection></VTKFile>)";
+  const auto file = restFrameAt(dir.path(), 0.25 + 5e-7);
+  CHECK(file.filename() == "particles_000010.vtp");
+  CHECK_THROWS_WITH(restFrameAt(dir.path(), 0.26), Catch::Contains("particles.pvd: no particle file at t = 0.26"));
+  const ParticleFrame rest = readParticleFrame(file);
+  for (std::size_t i = 0; i < 3 * f.size(); ++i) f.velocity_m_s[i] = 0.005;
+  const ParticleFrame moved = againstRest(f, rest, file);
+  CHECK(moved.speed(3) == Approx(std::sqrt(3.0) * 0.003).epsilon(1e-12));
+  ParticleFrame other = f;
+  other.radius_m[5] = 0.0049;
+  CHECK_THROWS_WITH(againstRest(other, rest, file), Catch::Contains("particles_000010.vtp: particle 5 has radius") &&
+                                                        Catch::Contains("not the same bed"));
+  other = lattice(2, 2, 3, 1);
+  CHECK_THROWS_WITH(againstRest(other, rest, file), Catch::Contains("the rest run has 8 particles, the run 12"));
 }

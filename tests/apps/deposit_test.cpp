@@ -51,7 +51,7 @@ TEST_CASE("demfem deposit --backend makes one soil file per deposition backend a
   const auto builtin = deposit(study, dir / "soil", "builtin", dir / "deposit-builtin");
   CHECK(builtin.at("deposition_backend") == "builtin");
   CHECK(builtin.at("soil_file") != liggghts.at("soil_file"));  // another deposition, another soil
-  CHECK(builtin.at("stages") == 2);  // the pour (all layers, one rain) and the final settling
+  CHECK(builtin.at("stages") == 3);  // the pour (all layers, one rain), the final settling and the reload phase
   CHECK(builtin.at("bulk_density_kg_m3").get<double>() > 0);
   CHECK(builtin.at("target_bulk_density_kg_m3").is_null());  // the plain gravity pour
   fs::remove_all(dir);

@@ -285,10 +285,10 @@ TEST_CASE("a backend that lacks the study's contact laws is named with each law,
   using demfem::study::BackendCapabilities;
   using namespace demfem::study;
   const BackendCapabilities all{"full", true, {NormalModel::EdemHysteretic, NormalModel::Hooke},
-                                {CohesionModel::None, CohesionModel::EdemLinear}, {RollingModel::EdemStandard}, {}, true};
+                                {CohesionModel::None, CohesionModel::EdemLinear}, {RollingModel::EdemStandard, RollingModel::Epsd}, {}, true};
   const BackendCapabilities hooke{"hooke-only", true, {NormalModel::Hooke}, {CohesionModel::None, CohesionModel::Sjkr},
                                   {RollingModel::Cdt}, {}, false};
-  // quick.json: edem-hysteretic, edem-linear, edem-standard; deposited by "builtin".
+  // quick.json: edem-hysteretic, edem-linear, epsd; deposited by "builtin".
   Study s = parseStudy(quick().dump(), "quick.json");
   s.dem.backend = "full";
   const std::vector<Issue> unknown = backendIssues(s, {all, hooke});

@@ -45,7 +45,7 @@ BackendEntry builtinEntry() {
               progress.update(fraction);
             });
             progress.finish(std::to_string(soil.particles.size()) + " particles");
-            cost = {report.steps, report.time_step_s};
+            cost = {report.steps, report.time_step_s, report.reload_steps, report.reload_time_step_s};
             return soil;
           },
           [](const study::Study& study) {

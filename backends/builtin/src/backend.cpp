@@ -5,7 +5,6 @@
 #include "demfem/adapter/tool_surface.hpp"
 #include "demfem/backends/builtin/simulation.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
-#include "demfem/backends/physics/time_step.hpp"
 #include "demfem/study/tool_motion.hpp"
 
 #include <cmath>
@@ -26,8 +25,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
  public:
   BuiltinBackend(const study::Study& study, const adapter::SettledSoil& soil, std::string soil_record)
       : study_(study), sim_(study.soil, binDomain(study.soil), study.dem.threads), soil_record_(std::move(soil_record)) {
-    addBinWalls(sim_, study.soil);
-    addSettledParticles(sim_, study.soil, soil);
+    loadSettledBed(sim_, study.soil, soil);
     for (const auto& tool : study.tools) {
       TriangleMesh mesh = toolMesh(tool);
       mesh.material = sim_.materials().index(tool.dem_material);
@@ -36,9 +34,7 @@ class BuiltinBackend final : public adapter::CouplingApi {
       // At rest at the plan's start pose (coupling_api.hpp, "After construction"); only the client moves it.
       sim_.setMeshMotion(m, study::planToolMotion(study, tool).start_m, {0, 0, 0}, 0);
     }
-    // A DEM step that divides the FEM step, so simulate(dt_FEM) lands exactly on the FEM time.
-    sim_.setTimeStep(study::demStepDividing(physics::demTimeStep(study).step_s, study.fem.dt_s));
-    sim_.setRollingRegularisationStep(physics::rollingRegularisationStep(study));
+    setRunTimeStep(sim_, study);
     if (study.output.vtk_every > 0) {
       vtk_interval_ = study.output.vtk_every * study.fem.dt_s;
       next_vtk_ = sim_.time();

@@ -64,14 +64,16 @@ TEST_CASE("builtin backend deposits a layered soil once and serves the coupling 
     CHECK(soil.particles.size() > 300);
     for (const auto& p : soil.particles) {
       CHECK(p.x_m[1] <= st.soil.fill_height_m);
-      // Tagged by the depth of its centre before the final settling, which moves a centre by well
-      // under 0.2 mm (measured 0.06 mm across the 10 mm boundary).
+      // Tagged by the depth of its centre before the final settling; the final settling and the
+      // reload phase (particles keep their layer) move a centre across the 10 mm boundary by well
+      // under 1 mm (measured 0.37 mm, 2026-12-08).
       const double depth = st.soil.fill_height_m - p.x_m[1];
-      if (std::fabs(depth - 0.01) > 2e-4) CHECK(p.layer == (depth < 0.01 ? 0 : 1));
+      INFO("depth " << depth);
+      if (std::fabs(depth - 0.01) > 1e-3) CHECK(p.layer == (depth < 0.01 ? 0 : 1));
     }
     CHECK(soil.backend == "builtin");
     CHECK(soil.seed == st.soil.deposition_seed);
-    CHECK(soil.settling.stages == 2);  // the pour and the final settling
+    CHECK(soil.settling.stages == 3);  // the pour, the final settling and the reload phase
     CHECK(soil.settling.bulk_density_kg_m3 == adapter::bulkDensity(soil.particles, st.soil));
     CHECK(soil.settling.coordination_number == adapter::meanCoordinationNumber(soil.particles));
     CHECK(soil.settling.threshold_J == st.soil.settle_kinetic_energy_J);

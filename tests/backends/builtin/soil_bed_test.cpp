@@ -1,7 +1,9 @@
 // The built-in deposition's bed (docs/builtin-dem.md, "Soil deposition and reuse"): the gravity
-// pour and the density protocol of soil.deposition.bulk_density_kg_m3 on a small two-layer bin.
+// pour and the density protocol of soil.deposition.bulk_density_kg_m3 on a small two-layer bin, and
+// the quick study's bed at rest (docs/builtin-dem.md, "A bed at rest").
 #include "demfem/adapter/settled_soil.hpp"
 #include "demfem/backends/builtin/soil_bin.hpp"
+#include "demfem/study/study.hpp"
 #include "support/study_in_code.hpp"
 
 #include <catch2/catch.hpp>
@@ -80,4 +82,26 @@ TEST_CASE("a stated bulk density is reached within 1 % and recorded, and one the
     INFO(message);
     CHECK(message.find("denser than the frictionless pour") != std::string::npos);
   }
+}
+
+// The rest test of issue 53 on the quick study (the paper studies' laws: edem-hysteretic normal,
+// edem-linear cohesion, epsd rolling; 1619 particles, seed 1, one thread): its bed, loaded as
+// `demfem run` loads it, left alone for 2 s at the run's step. Measured 2026-12-08: rms speed
+// 0.0098 mm/s, largest displacement 0.089 mm; on the constant-torque rolling law (edem-standard,
+// EDEM's standard rolling friction) the study's bed creeps: 0.36 mm/s, 4.8 mm, 34 particles beyond
+// 1 mm, so the bounds below separate a bed at rest from one that is not.
+TEST_CASE("the quick study's bed stays at rest for 2 s: rms speed below 0.3 mm/s, no particle moved by 1 mm",
+          "[builtin][physics]") {
+  study::Study s = study::loadStudy(DEMFEM_SOURCE_DIR "/studies/quick.json");
+  s.dem.threads = 1;
+  const adapter::SettledSoil soil = deposit(s);
+  CHECK(soil.settling.stages == 3);
+  CHECK(soil.settling.stages_capped == 0);  // the reload phase ended at rest
+  CHECK(adapter::unsettledReason(soil.settling).empty());
+  const builtin::RestFigures rest = builtin::measureRest(s, soil, 2.0, 1, {});
+  INFO("rms speed " << rest.rms_speed_m_s * 1e3 << " mm/s, largest displacement " << rest.largest_displacement_m * 1e3 << " mm");
+  CHECK(rest.rms_speed_m_s < 0.3e-3);
+  CHECK(rest.largest_displacement_m < 1e-3);
+  CHECK(rest.moved_over_1mm == 0);
+  CHECK(rest.end.size() == soil.particles.size());
 }

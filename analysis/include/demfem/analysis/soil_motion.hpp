@@ -62,6 +62,12 @@
 //   measured elsewhere) there is nothing to check.
 // - toolDisplacement(): the mean z of the tool's nodes at a frame minus at the first frame (the
 //   insertion does not move it in z).
+// - againstRest(): `frame` with every particle's velocity minus its velocity in `rest`, the same bed
+//   left alone (no tool) at the same time: the motion the tool causes, without the bed's own creep
+//   (docs/analysis.md, "Soil motion"). The same particles in the same order: InputError naming
+//   `rest_file` when the counts or any radius differ.
+// - restFrameAt(): the particle file of the rest run `rest_dir` (DIR/vtk/particles.pvd; no tool
+//   needed) at time `time_s`, within 1e-6 s; InputError naming the collection when it has none there.
 #pragma once
 
 #include <array>
@@ -184,5 +190,8 @@ RunFrames loadRun(const std::filesystem::path& run_dir, const std::string& tool 
 ParticleFrame readParticleFrame(const std::filesystem::path& file);
 
 double toolDisplacement(const RunFrames& run, std::size_t frame);
+
+ParticleFrame againstRest(const ParticleFrame& frame, const ParticleFrame& rest, const std::filesystem::path& rest_file);
+std::filesystem::path restFrameAt(const std::filesystem::path& rest_dir, double time_s);
 
 }  // namespace demfem::analysis

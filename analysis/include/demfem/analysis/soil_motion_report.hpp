@@ -13,7 +13,10 @@
 //   thickness, the flow section in cells of `flow_cell_m`, its alignment order and its streamlines
 //   (soil_motion.hpp, flowSection(), alignmentOrder(), traceStreamlines() with `streamlines`). The surface is the highest particle
 //   top (y + radius) of the first frame; layer boundaries are layerBoundaries() of the first frame.
-// - soilMotionJson(): {"threshold_mm_s", "cell_mm", "runs": [{"run", "tool", "surface_mm",
+//   With `rest_run` the instant's frame is first taken against the rest run's frame at its time
+//   (soil_motion.hpp, againstRest(), restFrameAt()): sections, the region in motion, the speeds in
+//   front and the flow are then the motion relative to the bed's own rest state.
+// - soilMotionJson(): {"threshold_mm_s", "cell_mm", "rest_run" (null without), "runs": [{"run", "tool", "surface_mm",
 //   "mixing_before", "mixing_after", "instants": [{"displacement_mm", "t_s", "moving_depth_mm",
 //   "moving_length_mm", "moving_width_mm", "moving_particles", "front_speed_min_mm_s",
 //   "front_speed_median_mm_s", "front_speed_max_mm_s", "front_particles", "mixing", "streamline_order",
@@ -52,6 +55,10 @@ struct SoilMotionSettings {
   double flow_cell_m = 0.02;            // flow sections (two diameters: about 5 particles per cell on the section)
   StreamlineRules streamlines;
   std::string tool;                     // empty: the run's only tool
+  // A run of the same bed left alone (particle files at the run's times, the same particles in the
+  // same order): every measure of an instant takes the velocities against it (againstRest()), so
+  // the bed's own creep is not counted as motion. Empty: the velocities as they are.
+  std::filesystem::path rest_run;
 };
 
 struct SoilMotionInstant {

@@ -23,6 +23,8 @@ namespace demfem::cli {
 struct DepositCost {
   long steps = 0;          // DEM steps (0 where the backend does not report them)
   double time_step_s = 0;  // deposition step (0 where the backend does not report it)
+  long reload_steps = 0;   // the built-in reload phase's steps, at the run's step reload_time_step_s
+  double reload_time_step_s = 0;
 };
 
 // The measured DEM speed of a run: the threads (or MPI ranks) it uses and the particle-steps per

@@ -16,9 +16,15 @@
 //   that is still ringing. The step is the study's or a tenth of the stiffest spring's critical
 //   step, whichever is larger. Particles whose centre ends above the fill height are removed; the
 //   rest are tagged by the depth of their centre below the fill height with the layer (and that
-//   layer's material) covering that depth, and settle once more. The result carries its settling
-//   figures: stages = 2 (the pour and the final settling), those that hit their cap, the final total
-//   kinetic energy, surface height, packing fraction, bulk density and coordination number.
+//   layer's material) covering that depth, and settle once more. Then the reload phase: the bed
+//   loaded as a run loads it (loadSettledBed(), setRunTimeStep(): contact history dropped, the run's
+//   step) and left alone for 0.5 s, again and again from where it ended, until a window moves no
+//   particle centre by more than 0.05 of the smallest diameter and lifts none above the fill height
+//   (centres risen above it are trimmed after each window; at most 10 windows; the bed is the end
+//   of the last; particles keep the layer the final settling tagged them with). The result carries its settling figures: stages = 3 (the pour, the final
+//   settling and the reload phase), those that hit their cap (the reload phase: not at rest after 10
+//   windows), the total kinetic energy at the end of the final settling (the reload phase is judged
+//   by displacement), surface height, packing fraction, bulk density and coordination number.
 // - With soil.bulk_density_kg_m3 (kg/m^3) the density protocol: the plain pour, then pours with the
 //   inter-particle static and rolling friction times f in [0, 1) (walls keep theirs), f found by
 //   regula falsi until the bed's bulk density is within 1 % of the target (at most 8 pours), the
@@ -40,8 +46,10 @@ namespace demfem::builtin {
 
 // What a deposition cost, besides the settling figures the soil itself carries.
 struct DepositReport {
-  long steps = 0;
+  long steps = 0;  // of the pours and settlings, at time_step_s
   double time_step_s = 0;
+  long reload_steps = 0;  // of the reload phases, at the run's step reload_time_step_s
+  double reload_time_step_s = 0;
 };
 
 // The DEM domain of a study's bin (room above the fill for deposition and tools).
@@ -71,5 +79,29 @@ adapter::SettledSoil depositSoil(const study::Study& study, int threads, Deposit
 // Adds the settled particles to `sim` with their layer materials, in spatial order (cells of one
 // diameter, x fastest, then y, then z), not in the file's order.
 void addSettledParticles(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled);
+// The bed as `demfem run` loads a soil file: the bin's walls and addSettledParticles() (positions
+// only: no velocities, no contact history).
+void loadSettledBed(DemSimulation& sim, const study::Soil& soil, const adapter::SettledSoil& settled);
+// The run's steps: the study's DEM step shortened to divide the FEM step, and its rolling
+// regularisation step. Set after every wall, mesh and particle is in `sim` (the step is checked
+// against the stiffest of their springs).
+void setRunTimeStep(DemSimulation& sim, const study::Study& study);
+
+// A bed at rest (docs/builtin-dem.md, "A bed at rest"): `settled` loaded as a run loads it
+// (loadSettledBed(), setRunTimeStep()) and left alone for `rest_s` of simulated time with the
+// study's laws (no settling aid). `observe` (may be empty) sees the simulation at t = 0 and after
+// every `observe_every_s` (rounded to whole steps; 0: every twentieth of the rest).
+struct RestFigures {
+  double rms_speed_m_s = 0;                // over all particles, at the end
+  double largest_displacement_m = 0;       // of a particle centre, start to end
+  double largest_late_displacement_m = 0;  // over the second half of the rest alone
+  std::size_t moved_over_1mm = 0;          // particles displaced more than 1 mm, start to end
+  long steps = 0;
+  double time_step_s = 0;                  // the run's
+  std::vector<adapter::SoilParticle> end;  // the bed at the end (in the loaded order)
+};
+using RestObserver = std::function<void(const DemSimulation&)>;
+RestFigures measureRest(const study::Study& study, const adapter::SettledSoil& settled, double rest_s, int threads,
+                        const RestObserver& observe, double observe_every_s = 0);
 
 }  // namespace demfem::builtin
