@@ -454,7 +454,10 @@ const Section<Soil>& depositionSection() {
         "(docs/builtin-dem.md, \"Settled soil file\")"},
        {"threads", &Soil::deposition_threads, Need::Optional, {}, {1, kMaxThreads}, always(), {},
         "threads of the built-in deposition; the packing's bits depend on them, so they are part of the soil "
-        "hash (a run's own /dem/threads never picks another soil)"}}};
+        "hash (a run's own /dem/threads never picks another soil)"},
+       {"reload_until_at_rest", &Soil::reload_until_at_rest, Need::Optional, {}, {}, always(), {},
+        "the built-in deposition ends by loading the bed as a run loads it until it stays at rest "
+        "(docs/builtin-dem.md, \"A bed at rest\"); false: LIGGGHTS' own protocol, pour and settle"}}};
   return s;
 }
 

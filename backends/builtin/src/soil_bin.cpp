@@ -252,7 +252,7 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
   const double stages = 2;  // the pour and the final settling
   adapter::SettledSoil out;
   out.settling.threshold_J = soil.settle_kinetic_energy_J;
-  out.settling.stages = 3;  // the pour, the final settling and the reload phase
+  out.settling.stages = soil.reload_until_at_rest ? 3 : 2;  // the pour, the final settling and the reload phase
   out.settling.pour_friction_scale = friction_scale;
   const auto line = [&](double fraction, const std::string& text) {
     if (progress) progress(fraction, text.empty() ? text : label + text);
@@ -365,9 +365,10 @@ adapter::SettledSoil pour(const study::Study& study, int threads, double frictio
   // the bed, not by its kinetic energy (a bed on EDEM's standard rolling law creeps through its
   // windows, and loading it starts a run from rest whatever its energy).
   out.settling.kinetic_energy_J = sim->kineticEnergy();
-  const ReloadFigures reload = reloadUntilAtRest(study, threads, out.particles, [&](const std::string& text) { line(1.0, text); });
-  if (!reload.at_rest) ++out.settling.stages_capped;
-  {
+  ReloadFigures reload;
+  if (soil.reload_until_at_rest) {
+    reload = reloadUntilAtRest(study, threads, out.particles, [&](const std::string& text) { line(1.0, text); });
+    if (!reload.at_rest) ++out.settling.stages_capped;
     std::ostringstream text;
     text << "reloaded as a run loads it: " << (reload.at_rest ? "at rest" : "not at rest") << " after " << reload.windows
          << " windows of " << kReloadWindow_s << " s (largest displacement in the last " << reload.last.largest_displacement_m * 1e3

@@ -84,8 +84,8 @@ TEST_CASE("a stated bulk density is reached within 1 % and recorded, and one the
   }
 }
 
-// The rest test of issue 53 on the quick study (the paper studies' laws: edem-hysteretic normal,
-// edem-linear cohesion, epsd rolling; 1619 particles, seed 1, one thread): its bed, loaded as
+// A bed at rest (docs/builtin-dem.md, "A bed at rest"): the rest test on the quick study (the
+// paper studies' laws: edem-hysteretic normal, edem-linear cohesion, epsd rolling; 1619 particles, seed 1, one thread): its bed, loaded as
 // `demfem run` loads it, left alone for 2 s at the run's step. Measured 2026-12-08: rms speed
 // 0.0098 mm/s, largest displacement 0.089 mm; on the constant-torque rolling law (edem-standard,
 // EDEM's standard rolling friction) the study's bed creeps: 0.36 mm/s, 4.8 mm, 34 particles beyond

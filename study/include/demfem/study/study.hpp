@@ -131,6 +131,10 @@ struct Soil {
   // Threads of the built-in deposition (soil.deposition.threads): the packing's bits depend on them,
   // so they enter the soil hash, and a run's own thread count never picks another soil.
   int deposition_threads = 1;
+  // soil.deposition.reload_until_at_rest: the built-in deposition ends with the reload phase (the
+  // bed loaded as a run loads it until it is at rest, docs/builtin-dem.md, "A bed at rest"); off,
+  // the protocol is LIGGGHTS' own (pour and settle), for like-for-like comparisons with it.
+  bool reload_until_at_rest = true;
   bool operator==(const Soil&) const = default;
 };
 
