@@ -136,7 +136,7 @@ int main(int argc, char** argv) {
   app.add_option("--max-simulate-s", o.max_simulate_s,
                  "Longest simulate call accepted (s); default: the study's coupling.max_simulate_s, else 1")
       ->check(CLI::PositiveNumber);
-  app.add_option("--output", o.output_dir, "Directory of the DEM's own files (builtin: VTK); default: the study's output.directory");
+  app.add_option("--output,--out", o.output_dir, "Directory of the DEM's own files (builtin: VTK); default: the study's output.directory");
   app.add_option("--connect-timeout-s", o.connect_timeout_s, "Give up if no client says hello within this time (s)")
       ->check(CLI::PositiveNumber);
   app.add_option("--idle-timeout-s", o.idle_timeout_s,

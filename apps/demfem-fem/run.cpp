@@ -146,7 +146,7 @@ void addFemRunCommand(CLI::App& app) {
   cmd->add_option("--connect", o->endpoint, "DEM server endpoint (tcp://HOST:PORT, ipc://PATH); default: the study's coupling.endpoint");
   cmd->add_option("--curve-keys", o->curve_keys, "CurveZMQ key directory (server.pub, client.pub, client.secret)")
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
+  cmd->add_option("--output,--out", o->output_dir, "Output directory; default: the study's output.directory");
   cmd->add_option("--timeout-s", o->timeout_s, "Seconds to wait for any DEM reply; default: the study's coupling.timeout_s")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (insertion + drag; outputs then marked incomplete); default: the whole plan")

@@ -26,7 +26,7 @@ struct AnalysisOptions {
 
 inline void addAnalysisOptions(CLI::App& cmd, AnalysisOptions& options) {
   auto& e = options.settings.evaluation;
-  cmd.add_option("--out", options.out_dir, "Output directory (tables, evaluated curves, plots/, report.md)")->capture_default_str();
+  cmd.add_option("--out,--output", options.out_dir, "Output directory (tables, evaluated curves, plots/, report.md)")->capture_default_str();
   cmd.add_option("--window-begin-mm", e.window_begin_mm, "Start of the statistics window in tool displacement (mm)")->capture_default_str();
   cmd.add_option("--window-end-mm", e.window_end_mm, "End of the statistics window in tool displacement (mm)")->capture_default_str();
   cmd.add_option("--end-at", options.end_signal, "Signal whose maximum ends a raw soil-bin run (Section 2.3)")

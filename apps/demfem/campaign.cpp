@@ -124,7 +124,7 @@ void addCampaignCommand(CLI::App& app) {
       "checkpoints; run again to resume (finished cases are not rerun, interrupted ones continue from their checkpoint). "
       "With --report OUT, write OUT/paper-reproduction.md from the finished runs instead, beside the paper's numbers");
   cmd->add_option("STUDY", o->studies, "Study files, one per case (coupled or dem-only, built-in DEM)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--dir", o->directory, "Directory of the cases' run directories")->capture_default_str();
+  cmd->add_option("--dir,--out,--output", o->directory, "Directory of the cases' run directories")->capture_default_str();
   cmd->add_option("--jobs", o->run.jobs, "Cases run at once")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--threads", o->run.threads, "Built-in DEM threads per case; default: the study's dem.threads / jobs")
       ->check(CLI::PositiveNumber);

@@ -161,7 +161,7 @@ void addCptCommand(CLI::App& app) {
   cmd->add_option("STUDY", *studies, "Cone-penetration studies (e.g. studies/cpt.json studies/cpt_unlayered.json)")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--output", o->output_dir, "Output directory")->capture_default_str();
+  cmd->add_option("--out,--output", o->output_dir, "Output directory")->capture_default_str();
   addCptOptions(*cmd, *o);
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([studies, o, &json_target] { runConePenetration(*studies, *o, json_target); });

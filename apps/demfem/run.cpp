@@ -285,7 +285,7 @@ void addRunCommand(CLI::App& app) {
                                  "demfem-fem, connected over ipc://");
   auto o = std::make_shared<RunOptions>();
   cmd->add_option("study", o->study_file, "Study file (JSON)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--output", o->output_dir, "Output directory; default: the study's output.directory");
+  cmd->add_option("--output,--out", o->output_dir, "Output directory; default: the study's output.directory");
   cmd->add_option("--backend", o->backend, "Override the study's DEM backend (builtin, liggghts, constant, harmonic, spring)");
   cmd->add_option("--steps", o->steps, "Stop after this many FEM steps (outputs then marked incomplete)")->check(CLI::PositiveNumber);
   cmd->add_option("--checkpoint-every", o->checkpoint_every, "Coupled checkpoint every N FEM steps")->check(CLI::PositiveNumber);

@@ -93,7 +93,7 @@ void addSoilMotionCommand(CLI::App& app) {
                   "A run of the same bed left alone (vtk/particles.pvd at the runs' times, e.g. demfem-bench-soil-bed --rest-vtk): "
                   "velocities are taken against it, so the bed's own creep is not motion")
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--out", o->out_dir, "Output directory")->capture_default_str();
+  cmd->add_option("--out,--output", o->out_dir, "Output directory")->capture_default_str();
   addPlotOptions(*cmd, o->no_plots, o->gnuplot, "SVG and PNG plots");
   std::string& json_target = addJsonOption(*cmd);
   cmd->callback([o, &json_target] {

@@ -50,3 +50,23 @@ TEST_CASE("a claimed output directory loses a killed writer's temporaries and ke
   CHECK(fs::exists(dir / "out" / "sensors.csv.partial"));
   fs::remove_all(dir);
 }
+
+TEST_CASE("every command that writes a directory takes both --out and --output", "[apps]") {
+  // One flag name for users whichever command they run (it was --out, --output or --dir).
+  const fs::path dir = freshDir("out-flags");
+  for (const std::vector<std::string>& command :
+       {std::vector<std::string>{"demfem", "run"}, {"demfem", "evaluate"}, {"demfem", "compare"}, {"demfem", "calibrate"},
+        {"demfem", "diagnose"}, {"demfem", "cpt"}, {"demfem", "soil-motion"}, {"demfem", "campaign"}, {"demfem-fem", "run"},
+        {"demfem-dem"}}) {
+    std::vector<std::string> args{app(command.front())};
+    args.insert(args.end(), command.begin() + 1, command.end());
+    args.push_back("--help");
+    Process p(args, dir / "help");
+    INFO(command.front() << (command.size() > 1 ? " " + command[1] : std::string()) << ": " << p.out());
+    CHECK(exitedOk(p.wait(std::chrono::seconds(60))));
+    const std::string help = p.out();
+    CHECK((help.find("--out,") != std::string::npos || help.find(",--out ") != std::string::npos));  // not only --output
+    CHECK(help.find("--output") != std::string::npos);
+  }
+  fs::remove_all(dir);
+}
