@@ -2,14 +2,13 @@
 #pragma once
 
 #include "support/small_study.hpp"
+#include "support/spawn.hpp"
 #include "support/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -23,7 +22,6 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
 
 namespace demfem::testing {
 
@@ -43,18 +41,8 @@ using support::writeStudy;
 
 class Process {
  public:
-  Process(std::vector<std::string> args, const fs::path& log_stem) : stdout_(log_stem.string() + ".out"), stderr_(log_stem.string() + ".err") {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, stdout_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, stderr_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) throw std::runtime_error(std::string("cannot start ") + argv[0]);
-  }
+  Process(std::vector<std::string> args, const fs::path& log_stem)
+      : stdout_(log_stem.string() + ".out"), stderr_(log_stem.string() + ".err"), pid_(support::spawnLogged(std::move(args), stdout_, stderr_)) {}
   ~Process() {
     if (!status_) {
       kill(pid_, SIGKILL);

@@ -7,12 +7,11 @@
 #pragma once
 
 #include "hidden_effects.hpp"
+#include "support/spawn.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -30,7 +29,6 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
 
 namespace demfem::campaign::test {
 
@@ -61,18 +59,7 @@ inline Answer answerFromJson(const nlohmann::json& j) {
 // Runs `args` with stdout and stderr to `log_stem`.out/.err; returns the wait status (-1: killed at
 // `limit`).
 inline int runProcess(std::vector<std::string> args, const fs::path& log_stem, std::chrono::seconds limit) {
-  const std::string out = log_stem.string() + ".out", err = log_stem.string() + ".err";
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) throw std::runtime_error(std::string("cannot start ") + argv[0]);
+  const pid_t pid = support::spawnLogged(std::move(args), log_stem.string() + ".out", log_stem.string() + ".err");
   const auto deadline = std::chrono::steady_clock::now() + limit;
   int status = 0;
   while (waitpid(pid, &status, WNOHANG) != pid) {
